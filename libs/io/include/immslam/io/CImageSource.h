@@ -1,0 +1,69 @@
+/* imm-monoslam — one interface for every image stream (dataset folder, rawlog, live grabber,
+ * built-in renderer): the estimator never knows where frames come from. */
+#pragma once
+
+#include <immslam/camera/CCameraModel.h>
+#include <immslam/eval/TTrajectory.h>
+
+#include <opencv2/core/mat.hpp>
+
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace immslam::io
+{
+/** One input frame. */
+struct TFrame
+{
+  /** The input frame's own time in seconds (rgb.txt, rawlog timestamp, or index/fps). */
+  double timestamp = 0;
+  /** 0-based position in the input stream (counts skipped entries too). */
+  std::size_t index = 0;
+  /** 8-bit grey image (CV_8UC1): what the estimator uses. */
+  cv::Mat grey;
+  /** The original colour image (CV_8UC3, BGR) when the source is colour, else empty. */
+  cv::Mat colour;
+  /** Calibration attached to this frame by the source (rawlog cameraParams), may be null. */
+  camera::CCameraModel::Ptr camera;
+  /** Where it came from, for messages: "rgb/000012.png", "rawlog entry 57". */
+  std::string origin;
+};
+
+/** Outcome of CImageSource::next(). */
+enum class ENextStatus
+{
+  Frame,    ///< `frame` holds a new frame
+  Skipped,  ///< an entry was unusable (missing/unreadable image, other observation type): `why` says
+  End       ///< end of stream (or clean stop at a truncated/corrupted file: `why` says)
+};
+
+/** A stream of frames. Implementations never throw from next() for bad *content* (they skip or end
+ * with a reason); they throw std::runtime_error from their constructor when the source cannot be
+ * opened at all, naming the file. */
+class CImageSource
+{
+ public:
+  using Ptr = std::unique_ptr<CImageSource>;
+  virtual ~CImageSource() = default;
+
+  /** Fetches the next frame. \param why on Skipped/End, a human-readable reason ("" on normal end). */
+  virtual ENextStatus next(TFrame& frame, std::string& why) = 0;
+
+  /** Calibration known before reading frames (calib.txt, first rawlog observation), or null. */
+  virtual camera::CCameraModel::Ptr calibration() const { return nullptr; }
+
+  /** Ground-truth camera trajectory T_W_C, when the source has one (groundtruth.txt, GT poses). */
+  virtual std::optional<eval::TTrajectory> groundTruth() const { return std::nullopt; }
+
+  /** Short description for logs: "dataset folder ../shared/data/visp_rbt (99 frames)". */
+  virtual std::string describe() const = 0;
+
+  /** Number of entries if known in advance (for progress/ETA), else 0. */
+  virtual std::size_t sizeHint() const { return 0; }
+};
+
+/** Opens a dataset folder (../shared/data/README.md format) or a .rawlog file (either MRPT layout),
+ * chosen by what `path` is. \throws std::runtime_error naming the path if it is neither/unreadable. */
+CImageSource::Ptr openImageSource(const std::string& path);
+}  // namespace immslam::io

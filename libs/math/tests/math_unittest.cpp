@@ -1,0 +1,157 @@
+/* Tests: quaternion Jacobians vs numerical, chi-square quantiles, log-likelihoods. */
+#include <gtest/gtest.h>
+#include <immslam/math/bearing.h>
+#include <immslam/math/chi2.h>
+#include <immslam/math/gaussian.h>
+#include <immslam/math/numerical_jacobian.h>
+#include <immslam/math/quaternion.h>
+
+#include <random>
+
+using namespace immslam;
+using namespace immslam::math;
+
+namespace
+{
+Vec4 randomQuat(std::mt19937& rng)
+{
+  std::normal_distribution<double> n;
+  return Vec4(n(rng), n(rng), n(rng), n(rng)).normalized();
+}
+Vec3 randomVec3(std::mt19937& rng, double s = 1.0)
+{
+  std::normal_distribution<double> n(0, s);
+  return Vec3(n(rng), n(rng), n(rng));
+}
+}  // namespace
+
+TEST(Quaternion, RotateMatchesEigenAndJacobians)
+{
+  std::mt19937 rng(1);
+  for (int t = 0; t < 50; ++t)
+  {
+    const Vec4 q = randomQuat(rng);
+    const Vec3 a = randomVec3(rng);
+    Mat34 Jq;
+    Mat3 Ja;
+    const Vec3 r = quatRotate(q, a, &Jq, &Ja);
+    EXPECT_LT((r - toEigen(q) * a).norm(), 1e-12);
+    EXPECT_LT((Ja - quatToRotation(q)).norm(), 1e-12);
+    VecX x(7);
+    x << q, a;
+    const MatX Jn = numericalJacobian(
+        [](const VecX& v) -> VecX { return quatRotate(v.head<4>(), v.tail<3>()); }, x);
+    EXPECT_LT((Jn.leftCols(4) - Jq).norm(), 1e-7);
+    EXPECT_LT((Jn.rightCols(3) - Ja).norm(), 1e-7);
+  }
+}
+
+TEST(Quaternion, MultiplyMatchesEigenAndJacobians)
+{
+  std::mt19937 rng(2);
+  for (int t = 0; t < 50; ++t)
+  {
+    const Vec4 q1 = randomQuat(rng), q2 = randomQuat(rng);
+    Mat4 J1, J2;
+    const Vec4 r = quatMultiply(q1, q2, &J1, &J2);
+    EXPECT_LT((r - fromEigen(toEigen(q1) * toEigen(q2))).norm(), 1e-12);
+    VecX x(8);
+    x << q1, q2;
+    const MatX Jn = numericalJacobian(
+        [](const VecX& v) -> VecX { return quatMultiply(v.head<4>(), v.tail<4>()); }, x);
+    EXPECT_LT((Jn.leftCols(4) - J1).norm(), 1e-8);
+    EXPECT_LT((Jn.rightCols(4) - J2).norm(), 1e-8);
+  }
+}
+
+TEST(Quaternion, ExpLogRoundTripAndJacobian)
+{
+  std::mt19937 rng(3);
+  for (double scale : {1e-9, 1e-5, 1e-3, 0.1, 1.0, 2.5})
+  {
+    for (int t = 0; t < 20; ++t)
+    {
+      const Vec3 w = randomVec3(rng, scale);
+      if (w.norm() >= M_PI) continue;
+      Mat43 J;
+      const Vec4 q = quatFromRotationVector(w, &J);
+      EXPECT_NEAR(q.norm(), 1.0, 1e-12);
+      EXPECT_LT((quatToRotationVector(q) - w).norm(), 1e-9 + 1e-9 * w.norm());
+      const Eigen::AngleAxisd aa(w.norm(), w.norm() > 0 ? Vec3(w.normalized()) : Vec3::UnitX());
+      EXPECT_LT((quatToRotation(q) - aa.toRotationMatrix()).norm(), 1e-12);
+      const MatX Jn = numericalJacobian(
+          [](const VecX& v) -> VecX { return quatFromRotationVector(v); }, w, 1e-7);
+      EXPECT_LT((Jn - J).norm(), 1e-6) << "scale " << scale;
+    }
+  }
+}
+
+TEST(Quaternion, NormalizeJacobian)
+{
+  std::mt19937 rng(4);
+  const Vec4 q = 1.7 * randomQuat(rng);
+  Mat4 J;
+  const Vec4 qn = quatNormalized(q, &J);
+  EXPECT_NEAR(qn.norm(), 1.0, 1e-15);
+  const MatX Jn =
+      numericalJacobian([](const VecX& v) -> VecX { return quatNormalized(v); }, q);
+  EXPECT_LT((Jn - J).norm(), 1e-8);
+}
+
+TEST(Chi2, QuantilesMatchTables)
+{
+  EXPECT_NEAR(chi2Quantile(0.95, 1), 3.841459, 1e-5);
+  EXPECT_NEAR(chi2Quantile(0.95, 2), 5.991465, 1e-5);
+  EXPECT_NEAR(chi2Quantile(0.95, 3), 7.814728, 1e-5);
+  EXPECT_NEAR(chi2Quantile(0.99, 6), 16.811894, 1e-5);
+  EXPECT_NEAR(chi2Quantile(0.025, 150), 117.9845, 1e-3);
+  EXPECT_NEAR(chi2Quantile(0.975, 150), 185.8004, 1e-3);
+  for (int dof : {1, 3, 7, 40})
+    for (double p : {0.01, 0.5, 0.95})
+      EXPECT_NEAR(chi2Cdf(chi2Quantile(p, dof), dof), p, 1e-10);
+}
+
+TEST(Gaussian, LogLikelihoodMatchesClosedForm)
+{
+  MatX S(2, 2);
+  S << 4, 1, 1, 3;
+  VecX nu(2);
+  nu << 0.5, -1.2;
+  double d2 = 0;
+  const double ll = gaussianLogLikelihood(nu, S, &d2);
+  const double d2ref = nu.dot(S.inverse() * nu);
+  EXPECT_NEAR(d2, d2ref, 1e-12);
+  EXPECT_NEAR(ll, -0.5 * (d2ref + std::log(S.determinant()) + 2 * std::log(2 * M_PI)), 1e-12);
+  MatX bad = -S;
+  EXPECT_EQ(gaussianLogLikelihood(nu, bad), -std::numeric_limits<double>::infinity());
+}
+
+TEST(Gaussian, LogSumExpIsStable)
+{
+  VecX v(3);
+  v << -1000, -1001, -1002;
+  EXPECT_NEAR(logSumExp(v), -1000 + std::log(1 + std::exp(-1.0) + std::exp(-2.0)), 1e-12);
+}
+
+TEST(Bearing, AnglesRoundTripAndJacobians)
+{
+  std::mt19937 rng(5);
+  for (int t = 0; t < 50; ++t)
+  {
+    Vec3 v = randomVec3(rng);
+    if (std::hypot(v.x(), v.z()) < 0.1) continue;
+    const Bearing b(v);
+    EXPECT_NEAR(b.unitVector().norm(), 1.0, 1e-15);
+    Mat23 J;
+    const Vec2 tp = Bearing::AzimuthElevation(v, &J);
+    EXPECT_LT((Bearing::DirectionFromAngles(tp[0], tp[1]) - b.unitVector()).norm(), 1e-12);
+    const MatX Jn = numericalJacobian(
+        [](const VecX& x) -> VecX { return Bearing::AzimuthElevation(x); }, v);
+    EXPECT_LT((Jn - J).norm(), 1e-7);
+    Mat32 Jm;
+    Bearing::DirectionFromAngles(tp[0], tp[1], &Jm);
+    const MatX Jmn = numericalJacobian(
+        [](const VecX& x) -> VecX { return Bearing::DirectionFromAngles(x[0], x[1]); }, tp);
+    EXPECT_LT((Jmn - Jm).norm(), 1e-8);
+  }
+}
