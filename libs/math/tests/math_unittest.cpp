@@ -155,3 +155,24 @@ TEST(Bearing, AnglesRoundTripAndJacobians)
     EXPECT_LT((Jmn - Jm).norm(), 1e-8);
   }
 }
+
+#include <immslam/math/parallel.h>
+
+TEST(ThreadPool, CoversEveryIndexOnceAndPropagatesErrors)
+{
+  for (unsigned n : {1u, 2u, 3u})
+  {
+    CThreadPool pool(n);
+    for (int rep = 0; rep < 20; ++rep)
+    {
+      std::vector<int> hits(37, 0);
+      pool.parallelFor(0, 37, [&](int i) { hits[i]++; });
+      for (int h : hits) EXPECT_EQ(h, 1);
+    }
+    EXPECT_THROW(pool.parallelFor(0, 10, [](int i) { if (i == 7) throw std::runtime_error("x"); }),
+                 std::runtime_error);
+    int count = 0;
+    pool.parallelFor(0, 1, [&](int) { ++count; });
+    EXPECT_EQ(count, 1);
+  }
+}

@@ -55,7 +55,9 @@ class CCameraModel
   double cx() const { return m_cx; }
   double cy() const { return m_cy; }
 
-  /** True if uv lies inside the image with at least `margin` pixels to every border. */
+  /** True if uv lies inside the image with at least `margin` pixels to every border.
+   * The image covers \f$ [-0.5, W - 0.5] \times [-0.5, H - 0.5] \f$ (pixel centres at integers), so
+   * with margin = h the (2h+1)^2 patch centred on the pixel nearest to uv lies inside the image. */
   bool isInImage(const Vec2& uv, double margin = 0.0) const;
 
   /** One line of calib.txt: "MODEL W H PARAMS..." (full precision). */

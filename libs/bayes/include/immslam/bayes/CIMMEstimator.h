@@ -1,0 +1,85 @@
+/* imm-monoslam — the Interacting Multiple Model estimator (IMM paper Sec. III, Figs. 1-2; Blom &
+ * Bar-Shalom, the paper's ref. [1]). Generic: it knows nothing about cameras. It owns the r
+ * mode-conditioned Gaussians (x^i, P^i), all of the same dimension and layout, the model
+ * probabilities mu and the Markov transition matrix; the caller runs the mode-matched filters
+ * (prediction and update of each (x^i, P^i)) between mix() and updateProbabilities(). */
+#pragma once
+
+#include <immslam/math/types.h>
+
+#include <memory>
+#include <vector>
+
+namespace immslam::math
+{
+class CThreadPool;
+}
+
+namespace immslam::bayes
+{
+/** A mode-conditioned Gaussian. */
+struct TGaussian
+{
+  VecX x;
+  MatX P;
+};
+
+class CIMMEstimator
+{
+ public:
+  /** \param transition Markov matrix pi (r x r), pi(j, i) = P(M_k = i | M_{k-1} = j): rows sum to 1.
+   * \param prior initial model probabilities (sum 1). \param floor lower bound of every posterior
+   * probability after each update (then renormalized), so no model dies for ever.
+   * \throws std::invalid_argument if the sizes disagree, an entry is negative/NaN or a row does not
+   * sum to 1 (1e-9). */
+  CIMMEstimator(const MatX& transition, const VecX& prior, double floor = 1e-6);
+
+  int numModels() const { return static_cast<int>(m_mu.size()); }
+
+  /** The mode-conditioned states (all must keep the same dimension and layout). */
+  TGaussian& mode(int i) { return m_modes[i]; }
+  const TGaussian& mode(int i) const { return m_modes[i]; }
+  /** Sets every mode to the same Gaussian (start-up). */
+  void setAllModes(const VecX& x, const MatX& P);
+
+  /** Posterior probabilities mu_{k|k} (after updateProbabilities), or mu_{k-1|k-1} before. */
+  const VecX& probabilities() const { return m_mu; }
+  /** mu_{k|k-1} = pi^T mu_{k-1|k-1} (Fig. 2 step 1, eq. 7), valid after mix(). */
+  const VecX& predictedProbabilities() const { return m_muPred; }
+  const MatX& transition() const { return m_pi; }
+  double probabilityFloor() const { return m_floor; }
+
+  /** Fig. 2 step 1 (filter reinitialization): predicted probabilities, mixing weights
+   * \f$ \mu^{j|i} = \pi_{ji}\mu^j / \mu^i_{k|k-1} \f$, and every mode replaced by its mixed
+   * estimate and covariance \f$ \bar x^i = \sum_j \mu^{j|i} x^j \f$,
+   * \f$ \bar P^i = \sum_j \mu^{j|i} (P^j + (\bar x^i - x^j)(\bar x^i - x^j)^\top) \f$.
+   * The covariances are computed tile by tile (each input tile read once for all outputs, lower
+   * triangle only, then mirrored): O(r^2 n^2) flops, O(2 r n^2) memory traffic.
+   * \param pool optional worker pool (tiles in parallel; deterministic). */
+  void mix(math::CThreadPool* pool = nullptr);
+
+  /** The mixing weights mu^{j|i} of the last mix(): column i holds the weights of mode i. */
+  const MatX& mixingWeights() const { return m_mixW; }
+
+  /** Fig. 2 step 3: \f$ \mu^i_k \propto \mu^i_{k|k-1} L^i_k \f$ with the log-likelihoods of the
+   * joint innovation of all measurements of each mode (eq. 3), normalized in log space, then
+   * floored. Call after mix() (uses mu_{k|k-1}). Non-finite log-likelihoods count as -inf; if every
+   * one is -inf the probabilities stay at mu_{k|k-1}. */
+  void updateProbabilities(const VecX& logLikelihoods);
+
+  /** Fig. 2 step 4 and eqs. (10)-(11): the moment-matched combination of the modes with weights w
+   * (mu_k for the fused posterior, mu_{k|k-1} for the fused prediction of the search regions).
+   * \param P optional full covariance (O(r n^2)); pass nullptr when only the mean is needed. */
+  void combine(const VecX& w, VecX& x, MatX* P, math::CThreadPool* pool = nullptr) const;
+  /** Only the diagonal block [off, off+len) of the combined covariance (cheap: O(r len^2)). */
+  MatX combinedBlock(const VecX& w, const VecX& xComb, int off, int len) const;
+
+ private:
+  MatX m_pi;
+  VecX m_mu, m_muPred;
+  MatX m_mixW;
+  double m_floor;
+  std::vector<TGaussian> m_modes;
+  std::vector<MatX> m_scratch;  ///< output buffers of mix(), swapped with the modes' P
+};
+}  // namespace immslam::bayes

@@ -1,0 +1,90 @@
+/* imm-monoslam — stateless EKF covariance algebra on sparse Jacobians. */
+#include <immslam/bayes/ekf_update.h>
+
+#include <Eigen/Cholesky>
+#include <cmath>
+#include <stdexcept>
+
+namespace immslam::bayes
+{
+void CSparseJacobian::resize(int rows, int cols)
+{
+  m_rows = rows;
+  m_cols = cols;
+  m_blocks.clear();
+}
+
+void CSparseJacobian::addBlock(int row, int col, const MatX& J)
+{
+  if (row < 0 || col < 0 || row + J.rows() > m_rows || col + J.cols() > m_cols)
+    throw std::out_of_range("CSparseJacobian::addBlock: block outside the matrix");
+  m_blocks.push_back({row, col, J});
+}
+
+MatX CSparseJacobian::timesTransposedBy(const Eigen::Ref<const MatX>& P) const
+{
+  MatX PHt = MatX::Zero(P.rows(), m_rows);
+  for (const auto& b : m_blocks)
+    PHt.middleCols(b.row, b.J.rows()).noalias() += P.middleCols(b.col, b.J.cols()) * b.J.transpose();
+  return PHt;
+}
+
+MatX CSparseJacobian::times(const Eigen::Ref<const MatX>& M) const
+{
+  MatX out = MatX::Zero(m_rows, M.cols());
+  for (const auto& b : m_blocks)
+    out.middleRows(b.row, b.J.rows()).noalias() += b.J * M.middleRows(b.col, b.J.cols());
+  return out;
+}
+
+VecX CSparseJacobian::timesVector(const Eigen::Ref<const VecX>& x) const
+{
+  VecX out = VecX::Zero(m_rows);
+  for (const auto& b : m_blocks) out.segment(b.row, b.J.rows()).noalias() += b.J * x.segment(b.col, b.J.cols());
+  return out;
+}
+
+MatX CSparseJacobian::toDense() const
+{
+  MatX H = MatX::Zero(m_rows, m_cols);
+  for (const auto& b : m_blocks) H.block(b.row, b.col, b.J.rows(), b.J.cols()) += b.J;
+  return H;
+}
+
+MatX innovationCovariance(const MatX& P, const CSparseJacobian& H, const VecX& Rdiag)
+{
+  MatX S = H.times(H.timesTransposedBy(P));
+  S.diagonal() += Rdiag;
+  return S;
+}
+
+TUpdateResult ekfUpdate(VecX& x, MatX& P, const CSparseJacobian& H, const VecX& nu, const VecX& Rdiag)
+{
+  TUpdateResult res;
+  res.dim = static_cast<int>(nu.size());
+  if (nu.size() == 0)
+  {
+    res.ok = true;
+    return res;
+  }
+  const MatX PHt = H.timesTransposedBy(P);  // n x m
+  MatX S = H.times(PHt);
+  S = 0.5 * (S + S.transpose());
+  S.diagonal() += Rdiag;
+  const Eigen::LLT<MatX> llt(S);
+  if (llt.info() != Eigen::Success) return res;
+  // With S = L L^T: z = L^-1 nu, Z = L^-1 (P H^T)^T; then x += Z^T z, P -= Z^T Z.
+  const auto L = llt.matrixL();
+  const VecX z = L.solve(nu);
+  MatX Z = PHt.transpose();
+  L.solveInPlace(Z);
+  res.nis = z.squaredNorm();
+  res.logLikelihood =
+      -0.5 * (res.nis + 2.0 * llt.matrixLLT().diagonal().array().log().sum() + res.dim * std::log(2 * M_PI));
+  x.noalias() += Z.transpose() * z;
+  P.selfadjointView<Eigen::Lower>().rankUpdate(Z.transpose(), -1.0);
+  P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
+  res.ok = true;
+  return res;
+}
+}  // namespace immslam::bayes

@@ -1,0 +1,48 @@
+/* imm-monoslam — relative pose error (RPE) over a fixed frame delta. */
+#pragma once
+
+#include <immslam/eval/TTrajectory.h>
+#include <immslam/eval/alignment.h>
+
+#include <cstddef>
+#include <vector>
+
+namespace immslam::eval
+{
+/** Relative error between associated pairs k and k + delta. */
+struct TRpePairError
+{
+  double tStart = 0;        ///< ground-truth timestamp of pair k (s)
+  double tEnd = 0;          ///< ground-truth timestamp of pair k + delta (s)
+  double translation = 0;   ///< |s dp_est - dp_gt| (relative translations in the first pose's frame)
+  double rotationDeg = 0;   ///< angle of dR_gt^T dR_est, degrees
+};
+
+/** Result of computeRpe(). */
+struct TRpeResult
+{
+  int delta = 1;                 ///< step in associated pairs
+  size_t nPairs = 0;             ///< number of relative motions compared
+  double scale = 1;              ///< s applied to the estimate's relative translations
+  double translationRmse = 0;    ///< RMS translation error (gt units)
+  double translationMean = 0;    ///< mean translation error
+  double translationMedian = 0;  ///< median translation error
+  double translationMax = 0;     ///< largest translation error
+  double rotationRmseDeg = 0;    ///< RMS rotation error (degrees)
+  double rotationMeanDeg = 0;    ///< mean rotation error
+  double rotationMedianDeg = 0;  ///< median rotation error
+  double rotationMaxDeg = 0;     ///< largest rotation error
+  std::vector<TRpePairError> errors;  ///< one per compared relative motion, in time order
+};
+
+/** Relative pose error (Sturm et al., IROS 2012): poses are associated by timestamp, sorted by
+ * ground-truth time, and the relative motion from pair k to pair k + delta is compared:
+ * \f$ E_k = (Q_k^{-1} Q_{k+\delta})^{-1} (P_k^{-1} P_{k+\delta}) \f$ with the estimate's relative
+ * translation multiplied by the scale s. A rigid alignment does not change relative motions, so
+ * only s matters: from the Sim3 Umeyama alignment of the associated positions (a = Sim3) or 1
+ * (SE3, None).
+ * \param delta step in associated pairs (>= 1): 1 = consecutive associated frames.
+ * \throws std::invalid_argument if delta < 1; std::runtime_error if fewer than delta + 1 pairs. */
+TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta = 1,
+                      EAlignment a = EAlignment::Sim3, double maxDt = 0.01);
+}  // namespace immslam::eval

@@ -1,0 +1,57 @@
+/* imm-monoslam — camera motion models of the IMM bank (IMM paper Sec. I-B and V: stationary,
+ * pure rotation with constant angular velocity, general motion with constant linear and angular
+ * velocity), in the dimensionless formulation (paper ref. [2], doc/conventions.md).
+ *
+ * All models act on the same 13-D camera state x_v = (r, q, v, w): position r_W_C, orientation
+ * q_W_C, linear velocity v (in W), angular velocity w (in C). A model that constrains a velocity to
+ * zero does so through its transition (v' = 0 and/or w' = 0 with zero noise); the state layout is the
+ * same for every model, so IMM mixing needs no padding (see doc/imm.md, "state conversion"). */
+#pragma once
+
+#include <immslam/math/types.h>
+
+#include <string>
+
+namespace immslam::motion
+{
+using Vec13 = Eigen::Matrix<double, 13, 1>;
+using Mat13 = Eigen::Matrix<double, 13, 13>;
+
+/** Offsets of the camera state blocks. */
+constexpr int kR = 0, kQ = 3, kV = 7, kW = 10, kCamDim = 13;
+
+/** The family of a motion model: what moves. */
+enum class EMotionFamily
+{
+  Stationary,  ///< r' = r, q' = q, v' = 0, w' = 0: nothing moves, no process noise
+  Rotation,    ///< r' = r, v' = 0; q' = q (x) q((w + W) dt), w' = w + W: camera centre fixed
+  General      ///< r' = r + (v + V) dt, q' = q (x) q((w + W) dt), v' = v + V, w' = w + W
+};
+
+/** Name of a family as used in configs and CSV headers ("stationary", "rotation", "general"). */
+std::string familyName(EMotionFamily f);
+/** Parses a family name; throws std::invalid_argument naming the word. */
+EMotionFamily familyFromName(const std::string& name);
+
+/** One motion model: its family and acceleration noise in pixels (IMM paper Sec. V: 0.1, 0.5, 1 px).
+ * The impulses V = a dt and W = alpha dt have standard deviations sigma dt with
+ * \f$ \sigma_a = \sigma_{a,px}/f \f$ and \f$ \sigma_\alpha = \sigma_{\alpha,px}/f \f$ (f = focal length
+ * in pixels): the image motion such an acceleration causes on a feature at unit depth. */
+struct TMotionModel
+{
+  EMotionFamily family = EMotionFamily::General;
+  double sigmaLinearPx = 1.0;   ///< linear acceleration noise (general only), pixels
+  double sigmaAngularPx = 1.0;  ///< angular acceleration noise (rotation, general), pixels
+  std::string name;             ///< CSV column name, begins with the family name
+
+  /** "general_1px", "rotation_0.5px", "stationary" when name is empty. */
+  std::string displayName() const;
+};
+
+/** Camera-state prediction \f$ x_v' = f(x_v, n) \f$ of a model over dt frames, with
+ * \param F the transition Jacobian df/dx_v (13x13), \param Q the process noise covariance
+ * \f$ G\,\mathrm{diag}(\sigma_a^2 dt^2 I, \sigma_\alpha^2 dt^2 I)\,G^\top \f$ (G = df/d(V, W)), in state
+ * units (requires focalPx). The quaternion is normalized after the product (its Jacobian included in F). */
+Vec13 predictCamera(const TMotionModel& m, const Vec13& xv, double dt, double focalPx,
+                    Mat13* F = nullptr, Mat13* Q = nullptr);
+}  // namespace immslam::motion
