@@ -1,2 +1,0 @@
-# Empty dependencies file for immslam_math.
-# This may be replaced when dependencies are built.

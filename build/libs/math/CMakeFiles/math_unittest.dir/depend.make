@@ -1,2 +1,0 @@
-# Empty dependencies file for math_unittest.
-# This may be replaced when dependencies are built.

@@ -1,5 +1,0 @@
-if(EXISTS "/work/main/build/libs/math/math_unittest[1]_tests.cmake")
-  include("/work/main/build/libs/math/math_unittest[1]_tests.cmake")
-else()
-  add_test(math_unittest_NOT_BUILT math_unittest_NOT_BUILT)
-endif()
