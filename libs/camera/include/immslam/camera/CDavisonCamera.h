@@ -16,7 +16,7 @@ namespace immslam::camera
  *
  * Valid domain: for \f$ k_{d1} > 0 \f$ every ray in front projects (\f$ r_d < 1/\sqrt{2 k_{d1}} \f$)
  * and pixels near or beyond that radius (where \f$ 1 - 2 k_{d1} r_d^2 < 10^{-6} \f$) unproject as
- * if it were \f$ 10^{-6} \f$: very oblique rays (about 89.9 degrees), z > 0, finite; for \f$ k_{d1} < 0 \f$ project() returns false when
+ * if it were \f$ 10^{-6} \f$: very oblique rays (nearly 90 degrees), z > 0, finite; for \f$ k_{d1} < 0 \f$ project() returns false when
  * \f$ 1 + 2 k_{d1} r_u^2 \le 10^{-12} \f$. */
 class CDavisonCamera : public CCameraModel
 {

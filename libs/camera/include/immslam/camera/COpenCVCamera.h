@@ -38,10 +38,15 @@ class COpenCVCamera : public CCameraModel
   /** Focal lengths and principal point scale, distortion coefficients are unchanged. */
   Ptr scaled(double s) const override;
 
+  /** Radial coefficient of \f$ r^2 \f$. */
   double k1() const { return m_k1; }
+  /** Radial coefficient of \f$ r^4 \f$. */
   double k2() const { return m_k2; }
+  /** First tangential coefficient. */
   double p1() const { return m_p1; }
+  /** Second tangential coefficient. */
   double p2() const { return m_p2; }
+  /** Radial coefficient of \f$ r^6 \f$. */
   double k3() const { return m_k3; }
 
   /** The largest normalized undistorted radius \f$ \sqrt{x^2+y^2} \f$ up to which the radial

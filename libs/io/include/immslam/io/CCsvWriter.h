@@ -55,6 +55,7 @@ class CCsvCell
  * io::CCsvWriter csv(out + "/model_probabilities.csv", {"timestamp", "stationary", "general_1px"});
  * csv.addRow({t, mu[0], mu[1]});           // all doubles
  * csv.addRow(t, 12, "static", 3.5);        // mixed cells (variadic)
+ * csv.addCells(cells);                     // mixed cells built at run time
  * \endcode */
 class CCsvWriter
 {
@@ -71,7 +72,7 @@ class CCsvWriter
    * of values differs from the number of columns, or on a write error. */
   void addRow(const std::vector<double>& values);
   /** Appends a row of mixed cells (same checks). */
-  void addRow(const std::vector<CCsvCell>& cells);
+  void addCells(const std::vector<CCsvCell>& cells);
   /** Appends a row from any mix of numbers and strings: `addRow(t, n, "static", x)`. */
   template <typename First, typename... Rest,
             std::enable_if_t<!std::is_same_v<std::decay_t<First>, std::vector<double>> &&
@@ -79,7 +80,7 @@ class CCsvWriter
                              int> = 0>
   void addRow(const First& first, const Rest&... rest)
   {
-    addRow(std::vector<CCsvCell>{CCsvCell(first), CCsvCell(rest)...});
+    addCells(std::vector<CCsvCell>{CCsvCell(first), CCsvCell(rest)...});
   }
 
   /** Flushes to disk. \throws std::runtime_error naming the file on a write error. */

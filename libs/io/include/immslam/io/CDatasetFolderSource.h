@@ -57,6 +57,8 @@ class CDatasetFolderSource : public CImageSource
   std::string imagePath(const TDatasetEntry& e) const;
   /** Restarts the stream at the first entry. */
   void rewind() { m_cursor = 0; }
+  /** Continues the stream at entry `index` (0-based rgb.txt entry; past the end: End). */
+  void seek(std::size_t index) { m_cursor = index; }
 
  private:
   std::string m_folder;

@@ -40,7 +40,11 @@ enum class ENextStatus
 
 /** A stream of frames. Implementations never throw from next() for bad *content* (they skip or end
  * with a reason); they throw std::runtime_error from their constructor when the source cannot be
- * opened at all, naming the file. */
+ * opened at all, naming the file.
+ *
+ * Implementations: CDatasetFolderSource (CDatasetFolderSource.h), CRawlogSource (CRawlogSource.h).
+ * A live grabber fits the same interface (next() blocks until a frame arrives, sizeHint() 0,
+ * calibration() from its configuration). */
 class CImageSource
 {
  public:

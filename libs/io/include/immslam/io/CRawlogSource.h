@@ -32,8 +32,9 @@ namespace immslam::io
  * stream cut exactly between two objects is recognised by its missing trailer.
  *
  * External images: a relative file name is resolved against, in order, the MRPT convention
- * `<rawlog dir>/<rawlog name without extension>_Images` (also `_images`, `_IMAGES`) and the rawlog's
- * own folder (what convertDatasetToRawlog() writes); absolute names are used as they are. Images are
+ * `<rawlog dir>/<rawlog name without extension>_Images` (also `_images`, `_IMAGES`, then
+ * `<rawlog dir>/Images`; the first that exists) and the rawlog's own folder (what
+ * convertDatasetToRawlog() writes); absolute names are used as they are. Images are
  * decoded with cv::imread (not through MRPT's process-wide image path), but the constructor also
  * calls `mrpt::img::CImage::setImagesPathBase` with the resolved folder so that MRPT code handling
  * the same observations finds the images (a process-wide MRPT setting: the last opened rawlog wins).

@@ -46,7 +46,9 @@ struct TDataset2RawlogResult
  *   the calibration from elsewhere, e.g. `--calib`; a warning with the calib.txt line is returned);
  * - when groundtruth.txt exists, one `CObservationRobotPose` per pose: sensor label `GT`,
  *   `pose.mean` = T_W_C (camera optical frame x right, y down, z forward: NOT MRPT's x-forward body
- *   convention), `pose.cov` = diag(1e-6) (a nominal value: the files carry no uncertainty).
+ *   convention), `pose.cov` = diag(1e-6) (a nominal value: the files carry no uncertainty). The mean
+ *   is serialized by MRPT as yaw/pitch/roll; they are computed here from the quaternion (MRPT's own
+ *   matrix -> angles conversion loses up to 5e-3 rad within ~0.3 deg of pitch = +-90 deg).
  *
  * External images (embedImages = false): `CImage::setExternalStorage(name)` with `name` the image
  * path relative to the directory of `outRawlog` (e.g. `../data/visp_rbt/rgb/000001.png`), or the

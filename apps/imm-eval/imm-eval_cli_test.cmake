@@ -1,0 +1,68 @@
+# ctest script: runs imm-eval (EXE) on small TUM files written to WORKDIR and checks exit codes and
+# output. Usage: cmake -DEXE=... -DWORKDIR=... -P imm-eval_cli_test.cmake
+if(NOT EXE OR NOT WORKDIR)
+  message(FATAL_ERROR "imm-eval_cli_test.cmake needs -DEXE= and -DWORKDIR=")
+endif()
+file(REMOVE_RECURSE "${WORKDIR}")
+file(MAKE_DIRECTORY "${WORKDIR}")
+
+# Ground truth: 20 non-collinear integer positions, identity orientation, t = i s.
+# Estimate: 2 * gt + (10, 0, 0), timestamps 1 ms late -> Sim3 ATE 0, scale 0.5.
+set(gt "# ground truth\n")
+set(est "")
+foreach(i RANGE 0 19)
+  math(EXPR x "${i}")
+  math(EXPR y "(${i} * ${i}) % 5")
+  math(EXPR z "(${i} * 3) % 4")
+  math(EXPR ex "2 * ${x} + 10")
+  math(EXPR ey "2 * ${y}")
+  math(EXPR ez "2 * ${z}")
+  string(APPEND gt "${i}.000000 ${x} ${y} ${z} 0 0 0 1\n")
+  string(APPEND est "${i}.001 ${ex} ${ey} ${ez} 0 0 0 1\n")
+endforeach()
+file(WRITE "${WORKDIR}/gt.txt" "${gt}")
+file(WRITE "${WORKDIR}/est.txt" "${est}")
+file(WRITE "${WORKDIR}/bad.txt" "# comment\n0 0 0 0 0 0 0 1\n1 0 0 oops 0 0 0 1\n")
+
+function(run_case name expected_rc)
+  execute_process(COMMAND "${EXE}" ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL expected_rc)
+    message(FATAL_ERROR "${name}: exit ${rc}, expected ${expected_rc}\nstdout:\n${out}\nstderr:\n${err}")
+  endif()
+  set(OUT "${out}" PARENT_SCOPE)
+  set(ERR "${err}" PARENT_SCOPE)
+endfunction()
+
+function(expect name text regex)
+  if(NOT text MATCHES "${regex}")
+    message(FATAL_ERROR "${name}: output does not match '${regex}':\n${text}")
+  endif()
+endfunction()
+
+run_case(sim3 0 "${WORKDIR}/est.txt" "${WORKDIR}/gt.txt")
+expect(sim3 "${OUT}" "pairs +: 20\n")
+expect(sim3 "${OUT}" "scale +: 0\\.5\n")
+expect(sim3 "${OUT}" "ATE rmse +: [0-9.e-]+\n")
+expect(sim3 "${OUT}" "rotation RMSE +: ")
+
+run_case(json 0 "${WORKDIR}/est.txt" "${WORKDIR}/gt.txt" --json --max-dt 0.005 --rpe 1)
+expect(json "${OUT}" "\"n_pairs\": 20,")
+expect(json "${OUT}" "\"scale\": 0\\.5")
+expect(json "${OUT}" "\"rpe_delta\": 1")
+
+run_case(se3 0 "${WORKDIR}/est.txt" "${WORKDIR}/gt.txt" --se3)
+expect(se3 "${OUT}" "scale +: 1\n")
+
+run_case(maxdt_too_small 1 "${WORKDIR}/est.txt" "${WORKDIR}/gt.txt" --max-dt=0.0001)
+expect(maxdt_too_small "${ERR}" "est\\.txt")
+
+run_case(help 0 --help)
+expect(help "${OUT}" "Usage:")
+run_case(no_args 2)
+run_case(bad_option 2 "${WORKDIR}/est.txt" "${WORKDIR}/gt.txt" --frobnicate)
+run_case(conflict 2 "${WORKDIR}/est.txt" "${WORKDIR}/gt.txt" --se3 --no-align)
+run_case(missing_file 1 "${WORKDIR}/missing.txt" "${WORKDIR}/gt.txt")
+expect(missing_file "${ERR}" "missing\\.txt")
+run_case(malformed 1 "${WORKDIR}/est.txt" "${WORKDIR}/bad.txt")
+expect(malformed "${ERR}" "bad\\.txt:3")
+message(STATUS "imm-eval CLI: all cases passed")

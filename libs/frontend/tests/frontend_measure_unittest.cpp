@@ -1,0 +1,275 @@
+/* Measurements (printed, not asserted except for sanity): the ambiguity check's recall/precision
+ * trade-off, detection and search timings. Uses ../shared/data images when present. */
+#include "test_images.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+using namespace immslam;
+using namespace immslam::frontend;
+using namespace immslam::frontend::test;
+
+// ---------------------------------------------------------------------------------------------
+// Ambiguity check: recall / precision with and without
+// ---------------------------------------------------------------------------------------------
+
+namespace
+{
+struct TAmbStats
+{
+  int n = 0, correct = 0, wrong = 0;
+};
+
+/** Searches features of img in img2 = img moved by M, with a prediction error drawn from S, and
+ * counts correct (< 1 px) and wrong accepted matches. */
+TAmbStats ambiguityRun(const cv::Mat& img, const cv::Mat& img2, const cv::Mat& M,
+                       const std::vector<Vec2>& feats, const Mat2& S, double margin, unsigned seed)
+{
+  TSearchParams sp;
+  sp.ambiguityMargin = margin;
+  TSearchWorkspace ws;
+  const Mat2 A = linearPart(M);
+  const Eigen::LLT<Mat2> llt(S);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> N(0, 1);
+  TAmbStats st;
+  for (const Vec2& uv : feats)
+  {
+    CFeaturePatch patch;
+    if (!patch.extract(img, uv, 5)) continue;
+    const Vec2 truth = applyAffine(M, uv);
+    const Vec2 h = truth + llt.matrixL() * Vec2(N(rng), N(rng));
+    ++st.n;
+    const auto r = searchInEllipse(img2, patch.predictTemplate(A), h, S, sp, ws);
+    if (!r.found) continue;
+    if ((r.uv - truth).norm() < 1.0)
+      ++st.correct;
+    else
+      ++st.wrong;
+  }
+  return st;
+}
+
+void reportAmbiguity(const char* name, const cv::Mat& img, const cv::Mat& M, double noiseStd,
+                     TAmbStats* offOut = nullptr, TAmbStats* onOut = nullptr)
+{
+  cv::Mat img2 = warpImage(img, M);
+  if (noiseStd > 0)
+  {
+    cv::Mat noise(img2.size(), CV_16S);
+    cv::RNG(21).fill(noise, cv::RNG::NORMAL, 0, noiseStd);
+    cv::Mat tmp;
+    img2.convertTo(tmp, CV_16S);
+    tmp += noise;
+    tmp.convertTo(img2, CV_8U);
+  }
+  TDetectorParams dp;
+  dp.gridCols = 16;
+  dp.gridRows = 12;
+  dp.minDistancePx = 8;
+  dp.borderPx = 30;
+  std::vector<Vec2> feats;
+  for (const auto& c : detectInEmptyCells(img, {}, 400, dp)) feats.push_back(c.uv);
+  const Mat2 S = Mat2::Identity() * 1000.0 / (3.14159265 * 5.991);  // area 1000 px^2
+  for (const double margin : {0.0, 0.02, 0.05, 0.1})
+  {
+    const TAmbStats st = ambiguityRun(img, img2, M, feats, S, margin, 22);
+    std::printf(
+        "[ measure  ] ambiguity %-22s margin %.2f: %3d searched, %3d correct (recall "
+        "%.3f), %2d wrong\n",
+        name, margin, st.n, st.correct, double(st.correct) / std::max(st.n, 1), st.wrong);
+    if (margin == 0.0 && offOut) *offOut = st;
+    if (margin == 0.05 && onOut) *onOut = st;
+  }
+}
+}  // namespace
+
+TEST(Search, AmbiguityCheckTradeOff)
+{
+  const cv::Mat M = cv::getRotationMatrix2D(cv::Point2f(160, 120), 8, 1.05);
+  // Random texture.
+  TAmbStats off, on;
+  reportAmbiguity("random texture", makeTexture(320, 240, 30), M, 3.0, &off, &on);
+  EXPECT_LE(on.wrong, off.wrong);
+  // Repetitive texture: a random 9x9 tile repeated, plus noise.
+  cv::Mat tile(9, 9, CV_8UC1);
+  cv::RNG(31).fill(tile, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat rep;
+  cv::repeat(tile, 240 / 9 + 1, 320 / 9 + 1, rep);
+  rep = rep(cv::Rect(0, 0, 320, 240)).clone();
+  cv::GaussianBlur(rep, rep, cv::Size(0, 0), 1.0);
+  TAmbStats roff, ron;
+  reportAmbiguity("repetitive texture", rep, M, 3.0, &roff, &ron);
+  EXPECT_LE(ron.wrong, roff.wrong);
+  // Real image, if available.
+  const std::string path = sharedData() + "/monoslam_testseq/rgb/000100.png";
+  if (std::filesystem::exists(path))
+    reportAmbiguity("monoslam_testseq #100", loadGrey(path), M, 2.0);
+  else
+    std::printf("[ measure  ] %s absent: real-image ambiguity measurement skipped\n", path.c_str());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Timing (printed, not asserted)
+// ---------------------------------------------------------------------------------------------
+
+TEST(Timing, DetectionAndSearch)
+{
+  std::vector<std::pair<std::string, cv::Mat>> images = {
+      {"synthetic 320x240", makeTexture(320, 240, 60)},
+      {"synthetic 640x480", makeTexture(640, 480, 61)}};
+  const std::string real320 = sharedData() + "/monoslam_testseq/rgb/000100.png";
+  const std::string real640 = sharedData() + "/visp_rbt/rgb";
+  if (std::filesystem::exists(real320))
+    images.emplace_back("monoslam_testseq 320x240", loadGrey(real320));
+  if (std::filesystem::exists(real640))
+  {
+    std::vector<std::string> files;
+    for (const auto& e : std::filesystem::directory_iterator(real640)) files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    if (!files.empty()) images.emplace_back("visp_rbt 640x480", loadGrey(files[files.size() / 2]));
+  }
+  TDetectorParams dp;
+  for (const auto& [name, img] : images)
+  {
+    if (img.empty()) continue;
+    // Typical steady state: some cells occupied.
+    std::vector<Vec2> occ;
+    for (int i = 0; i < 20; ++i) occ.emplace_back((i * 37) % img.cols, (i * 53) % img.rows);
+    std::vector<cv::KeyPoint> kps;
+    const double tFast = medianTimeUs([&] { cv::FAST(img, kps, dp.fastThreshold, true); }, 100);
+    size_t nOut = 0;
+    const double tDet =
+        medianTimeUs([&] { nOut = detectInEmptyCells(img, occ, 20, dp).size(); }, 100);
+    const double tDetEmpty = medianTimeUs([&] { detectInEmptyCells(img, {}, 48, dp); }, 100);
+    cv::Mat eig;
+    const double tEig = medianTimeUs([&] { cv::cornerMinEigenVal(img, eig, 7, 3); }, 50);
+    std::printf(
+        "[ measure  ] %-26s FAST alone %6.0f us (%zu corners); detectInEmptyCells: %6.0f us "
+        "(20 occupied -> %zu new), %6.0f us (empty grid); whole-image cornerMinEigenVal "
+        "%6.0f us\n",
+        name.c_str(), tFast, kps.size(), tDet, nOut, tDetEmpty, tEig);
+  }
+
+  // Search: ~40 features, ellipse areas 100 and 1000 px^2.
+  const cv::Mat img = makeTexture(320, 240, 62);
+  const auto feats = featurePositions(img, 40, 63);
+  std::vector<cv::Mat> templs;
+  std::vector<CFeaturePatch> patches(feats.size());
+  for (size_t i = 0; i < feats.size(); ++i)
+  {
+    patches[i].extract(img, feats[i], 5);
+    templs.push_back(patches[i].originalTemplate());
+  }
+  TSearchParams sp;
+  TSearchWorkspace ws;
+  const int defaultThreads = cv::getNumThreads();
+  for (const int threads : {0, defaultThreads, 1})  // 0: the built-in direct ZNCC
+  {
+    sp.useMatchTemplate = threads > 0;
+    for (const double area : {100.0, 1000.0})
+    {
+      cv::setNumThreads(threads > 0 ? threads : defaultThreads);
+      const Mat2 S = Mat2::Identity() * area / (3.14159265 * sp.gateChi2);
+      int found = 0;
+      const double tAll = medianTimeUs(
+          [&]
+          {
+            found = 0;
+            for (size_t i = 0; i < feats.size(); ++i)
+              found += searchInEllipse(img, templs[i], feats[i] + Vec2(1.3, -0.7), S, sp, ws).found;
+          },
+          50);
+      const double tNoWs = medianTimeUs(
+          [&]
+          {
+            for (size_t i = 0; i < feats.size(); ++i)
+              searchInEllipse(img, templs[i], feats[i] + Vec2(1.3, -0.7), S, sp);
+          },
+          50);
+      const std::string how = threads == 0
+                                  ? std::string("direct ZNCC")
+                                  : "matchTemplate, " + std::to_string(threads) + " threads";
+      std::printf(
+          "[ measure  ] search, ellipse %5.0f px^2, %-26s %6.1f us/feature with "
+          "workspace, %6.1f without (%zu features, %d found)\n",
+          area, (how + ":").c_str(), tAll / feats.size(), tNoWs / feats.size(), feats.size(),
+          found);
+    }
+  }
+  cv::setNumThreads(defaultThreads);
+  Mat2 A;
+  A << 1.1, 0.3, -0.2, 0.9;
+  cv::Mat buf;
+  const double tPred = medianTimeUs(
+      [&]
+      {
+        for (auto& pt : patches) pt.predictTemplate(A, buf);
+      },
+      50);
+  std::printf("[ measure  ] predictTemplate (11x11): %.2f us/feature\n", tPred / patches.size());
+}
+
+TEST(RealSequence, TracksCornersThroughMonoslamTestseq)
+{
+  const std::string dir = sharedData() + "/monoslam_testseq/rgb/";
+  if (!std::filesystem::exists(dir + "000000.png"))
+    GTEST_SKIP() << dir << " absent: real-sequence tracking measurement skipped";
+  // Corners of frame 0 searched in every later frame around their last match (constant-position
+  // prediction, S = 16 I: a 300 px^2 ellipse), with the unwarped first-frame template.
+  const cv::Mat first = loadGrey(dir + "000000.png");
+  ASSERT_FALSE(first.empty());
+  TDetectorParams dp;
+  std::vector<Vec2> pos;
+  std::vector<CFeaturePatch> patches;
+  for (const auto& c : detectInEmptyCells(first, {}, 40, dp))
+  {
+    CFeaturePatch patch;
+    if (!patch.extract(first, c.uv, 5)) continue;
+    patches.push_back(patch);
+    pos.push_back(c.uv);
+  }
+  ASSERT_GT(patches.size(), 20u);
+  std::vector<char> alive(patches.size(), 1);
+  TSearchParams sp;
+  TSearchWorkspace ws;
+  const Mat2 S = Mat2::Identity() * 16;
+  int tracked10 = 0;
+  for (int k = 1; k <= 60; ++k)
+  {
+    char name[32];
+    std::snprintf(name, sizeof(name), "%06d.png", k);
+    const cv::Mat img = loadGrey(dir + name);
+    ASSERT_FALSE(img.empty()) << name;
+    int n = 0;
+    double sumScore = 0;
+    for (size_t i = 0; i < patches.size(); ++i)
+    {
+      if (!alive[i]) continue;
+      const auto r = searchInEllipse(img, patches[i].originalTemplate(), pos[i], S, sp, ws);
+      alive[i] = r.found;
+      if (!r.found) continue;
+      pos[i] = r.uv;
+      ++n;
+      sumScore += r.score;
+    }
+    if (k == 10) tracked10 = n;
+    if (k % 10 == 0 || k == 1)
+      std::printf(
+          "[ measure  ] monoslam_testseq frame %2d: %2d of %zu first-frame corners still "
+          "tracked, mean ZNCC %.3f\n",
+          k, n, patches.size(), n ? sumScore / n : 0.0);
+  }
+  EXPECT_GE(tracked10, int(patches.size()) / 2);
+}

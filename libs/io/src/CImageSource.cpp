@@ -1,0 +1,23 @@
+/* imm-monoslam — opening an image source by what a path is. */
+#include <immslam/io/CDatasetFolderSource.h>
+#include <immslam/io/CImageSource.h>
+#include <immslam/io/CRawlogSource.h>
+
+#include <filesystem>
+#include <stdexcept>
+
+namespace immslam::io
+{
+CImageSource::Ptr openImageSource(const std::string& path)
+{
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const auto st = fs::status(path, ec);
+  if (ec || !fs::exists(st))
+    throw std::runtime_error("input not found: " + path + " (expected a dataset folder or a .rawlog file)");
+  if (fs::is_directory(st)) return std::make_unique<CDatasetFolderSource>(path);
+  // Any other existing file (normally *.rawlog) is read as a rawlog; CRawlogSource throws naming
+  // the file if it is not one.
+  return std::make_unique<CRawlogSource>(path);
+}
+}  // namespace immslam::io

@@ -1,0 +1,358 @@
+/* imm-monoslam — rawlog image source (both layouts, damage-tolerant). */
+#include <immslam/camera/mrpt_camera.h>
+#include <immslam/io/CRawlogSource.h>
+
+#include "image_convert.h"
+#include "rawlog_stream.h"
+
+#include <mrpt/core/Clock.h>
+#include <mrpt/img/CImage.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CObservationImage.h>
+#include <mrpt/obs/CObservationRobotPose.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/poses/CPose3D.h>
+
+#include <Eigen/Geometry>
+
+#include <deque>
+#include <filesystem>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace immslam::io
+{
+namespace
+{
+/** One observation (or unknown object) of the stream, with where it came from. */
+struct TItem
+{
+  mrpt::obs::CObservation::Ptr obs;  ///< null for a non-observation object
+  std::string className;             ///< class of the object
+  std::size_t entry = 0;             ///< 0-based top-level object index
+  int sub = -1;                      ///< index inside a sensory frame, -1 at top level
+};
+
+/** Splits a top-level object into stream items (actions carry nothing for us). */
+void expandEntry(const mrpt::serialization::CSerializable::Ptr& obj, std::size_t entry,
+                 std::deque<TItem>& out, bool& sawSensoryFrame)
+{
+  using namespace mrpt::obs;
+  if (auto sf = std::dynamic_pointer_cast<CSensoryFrame>(obj))
+  {
+    sawSensoryFrame = true;
+    int i = 0;
+    for (const auto& o : *sf)
+    {
+      if (o) out.push_back({o, o->GetRuntimeClass()->className, entry, i});
+      ++i;
+    }
+  }
+  else if (auto o = std::dynamic_pointer_cast<CObservation>(obj))
+    out.push_back({o, o->GetRuntimeClass()->className, entry, -1});
+  else if (std::dynamic_pointer_cast<CActionCollection>(obj))
+    sawSensoryFrame = true;
+  else
+    out.push_back({nullptr, obj->GetRuntimeClass()->className, entry, -1});
+}
+
+bool isGroundTruth(const mrpt::obs::CObservation& o)
+{
+  return o.sensorLabel == "GT" && dynamic_cast<const mrpt::obs::CObservationRobotPose*>(&o);
+}
+
+eval::TStampedPose toStampedPose(const mrpt::obs::CObservationRobotPose& o)
+{
+  // The quaternion comes from the rotation matrix, not from CPose3D::getAsQuaternion(): that one
+  // goes through yaw/pitch/roll, which MRPT snaps to pitch = +-90 deg near gimbal lock (errors of
+  // 1e-3 seen on monoslammot_synth19), while the matrix survives serialization exactly.
+  const mrpt::poses::CPose3D& m = o.pose.mean;
+  const auto R = m.getRotationMatrix();
+  Mat3 R_W_C;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) R_W_C(r, c) = R(r, c);
+  Eigen::Quaterniond q(R_W_C);
+  q.normalize();
+  if (q.w() < 0) q.coeffs() *= -1.0;  // canonical sign: qw >= 0
+  eval::TStampedPose p;
+  p.timestamp = mrpt::Clock::toDouble(o.timestamp);
+  p.p_W_C = Vec3(m.x(), m.y(), m.z());
+  p.q_W_C = Vec4(q.w(), q.x(), q.y(), q.z());  // [qw qx qy qz], as mrpt::math::CQuaternion (r,x,y,z)
+  return p;
+}
+
+/** A TCamera that carries no calibration (default-constructed: zero focal length). */
+bool isEmptyCamera(const mrpt::img::TCamera& c)
+{
+  return c.ncols == 0 || c.nrows == 0 || !(c.fx() > 0) || !(c.fy() > 0);
+}
+
+std::string originOf(const TItem& it)
+{
+  std::string s = "rawlog entry " + std::to_string(it.entry);
+  if (it.sub >= 0) s += ", observation " + std::to_string(it.sub) + " of its sensory frame";
+  return s;
+}
+}  // namespace
+
+struct CRawlogSource::Impl
+{
+  std::string path;
+  std::string rawlogDir;
+  std::string imagesDir;  ///< "<dir>/<stem>_Images" if it exists, else rawlogDir
+  detail::TGzipInfo gzInfo;
+
+  // First-pass results.
+  std::size_t firstPassEntries = 0;
+  std::size_t items = 0;
+  bool sensoryFrames = false;
+  std::string damage;  ///< empty: clean end
+  camera::CCameraModel::Ptr calib;
+  eval::TTrajectory gt;
+  std::vector<std::string> warnings;
+
+  // Streaming state (second pass).
+  std::unique_ptr<detail::CRawlogReader> reader;
+  std::deque<TItem> pending;
+  std::size_t nextIndex = 0;
+  bool ended = false;
+  std::string endWhy;
+
+  // Calibration cache.
+  std::optional<mrpt::img::TCamera> lastTCam;
+  camera::CCameraModel::Ptr lastCam;
+
+  camera::CCameraModel::Ptr cameraOf(const mrpt::img::TCamera& c, std::string* err)
+  {
+    if (lastTCam && *lastTCam == c) return lastCam;
+    lastTCam = c;
+    lastCam.reset();
+    if (!isEmptyCamera(c))
+    {
+      try
+      {
+        lastCam = camera::fromTCamera(c);
+      }
+      catch (const std::exception& e)
+      {
+        if (err) *err = e.what();
+      }
+    }
+    return lastCam;
+  }
+
+  std::string resolveExternal(const std::string& name, std::string& tried) const
+  {
+    const fs::path p(name);
+    if (p.is_absolute())
+    {
+      tried = name;
+      return name;
+    }
+    std::error_code ec;
+    const std::string a = (fs::path(imagesDir) / p).string();
+    const std::string b = (fs::path(rawlogDir) / p).string();
+    if (fs::is_regular_file(a, ec)) return a;
+    if (fs::is_regular_file(b, ec)) return b;
+    tried = (a == b) ? a : a + " nor " + b;
+    return {};
+  }
+
+  void firstPass()
+  {
+    detail::CRawlogReader r(path, gzInfo);
+    std::deque<TItem> its;
+    std::string camErr;
+    for (;;)
+    {
+      mrpt::serialization::CSerializable::Ptr obj;
+      std::string why;
+      const auto res = r.read(obj, why);
+      if (res == detail::CRawlogReader::EResult::End) break;
+      if (res == detail::CRawlogReader::EResult::Damage)
+      {
+        if (r.entries() == 0 && items == 0)
+          throw std::runtime_error("cannot read rawlog " + path + " (not an MRPT rawlog?): " + why);
+        damage = "rawlog truncated/corrupt after entry " + std::to_string(r.entries()) + ": " + why;
+        break;
+      }
+      its.clear();
+      expandEntry(obj, r.entries() - 1, its, sensoryFrames);
+      for (const TItem& it : its)
+      {
+        if (it.obs && isGroundTruth(*it.obs))
+        {
+          gt.push_back(toStampedPose(dynamic_cast<const mrpt::obs::CObservationRobotPose&>(*it.obs)));
+          continue;
+        }
+        ++items;
+        if (calib || !it.obs) continue;
+        if (auto img = std::dynamic_pointer_cast<mrpt::obs::CObservationImage>(it.obs))
+        {
+          camErr.clear();
+          calib = cameraOf(img->cameraParams, &camErr);
+          if (!camErr.empty())
+            warnings.push_back(originOf(it) + ": cameraParams not usable: " + camErr);
+        }
+      }
+    }
+    firstPassEntries = r.entries();
+  }
+};
+
+CRawlogSource::CRawlogSource(const std::string& path) : m_impl(std::make_unique<Impl>())
+{
+  Impl& m = *m_impl;
+  m.path = path;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw std::runtime_error("rawlog file not found: " + path);
+  m.gzInfo = detail::inspectGzip(path);
+  const fs::path p(path);
+  m.rawlogDir = p.has_parent_path() ? p.parent_path().string() : std::string(".");
+  m.imagesDir = m.rawlogDir;
+  const std::string stem = p.stem().string();
+  for (const std::string& name : {stem + "_Images", stem + "_images", stem + "_IMAGES", std::string("Images")})
+  {
+    const fs::path d = fs::path(m.rawlogDir) / name;
+    if (fs::is_directory(d, ec))
+    {
+      m.imagesDir = d.string();
+      break;
+    }
+  }
+  m.firstPass();
+  // For MRPT code that loads the same observations' external images (process-wide setting).
+  mrpt::img::CImage::setImagesPathBase(m.imagesDir);
+  m.lastTCam.reset();
+  m.reader = std::make_unique<detail::CRawlogReader>(path, m.gzInfo);
+}
+
+CRawlogSource::~CRawlogSource() = default;
+
+ENextStatus CRawlogSource::next(TFrame& frame, std::string& why)
+{
+  Impl& m = *m_impl;
+  why.clear();
+  try
+  {
+    TItem it;
+    for (;;)
+    {
+      while (m.pending.empty())
+      {
+        if (m.ended)
+        {
+          why = m.endWhy;
+          return ENextStatus::End;
+        }
+        if (!m.damage.empty() && m.reader->entries() >= m.firstPassEntries)
+        {
+          // Stop where the first pass found the damage (the same place, whatever the reader does).
+          m.ended = true;
+          m.endWhy = m.damage;
+          m.reader.reset();
+          continue;
+        }
+        mrpt::serialization::CSerializable::Ptr obj;
+        std::string err;
+        const auto res = m.reader->read(obj, err);
+        if (res == detail::CRawlogReader::EResult::Object)
+        {
+          bool sf = false;
+          expandEntry(obj, m.reader->entries() - 1, m.pending, sf);
+          continue;
+        }
+        m.ended = true;
+        if (res == detail::CRawlogReader::EResult::Damage)
+          m.endWhy =
+              "rawlog truncated/corrupt after entry " + std::to_string(m.reader->entries()) + ": " + err;
+        m.reader.reset();  // releases the file
+      }
+      it = std::move(m.pending.front());
+      m.pending.pop_front();
+      if (!(it.obs && isGroundTruth(*it.obs))) break;  // ground truth: consumed silently
+    }
+
+    const std::size_t index = m.nextIndex++;
+    const std::string origin = originOf(it);
+    auto img = std::dynamic_pointer_cast<mrpt::obs::CObservationImage>(it.obs);
+    if (!img)
+    {
+      why = "observation of class " + it.className +
+            (it.obs ? " (label '" + it.obs->sensorLabel + "')" : std::string()) + " skipped (" +
+            origin + ")";
+      return ENextStatus::Skipped;
+    }
+    if (img->timestamp == INVALID_TIMESTAMP)
+    {
+      why = "CObservationImage without timestamp skipped (" + origin + ")";
+      return ENextStatus::Skipped;
+    }
+    TFrame f;
+    f.timestamp = mrpt::Clock::toDouble(img->timestamp);
+    f.index = index;
+    f.origin = origin;
+    std::string sub;
+    if (img->image.isExternallyStored())
+    {
+      const std::string name = img->image.getExternalStorageFile();
+      std::string tried;
+      const std::string file = m.resolveExternal(name, tried);
+      if (file.empty())
+      {
+        why = "external image not found: " + tried + " (" + origin + ")";
+        return ENextStatus::Skipped;
+      }
+      f.origin = origin + " (" + file + ")";
+      if (!detail::loadFrameImages(file, f, sub))
+      {
+        why = sub + " (" + origin + ")";
+        return ENextStatus::Skipped;
+      }
+    }
+    else if (!detail::setFrameImages(img->image.asCvMatRef(), f, sub))
+    {
+      why = "embedded image: " + sub + " (" + origin + ")";
+      return ENextStatus::Skipped;
+    }
+    f.camera = m.cameraOf(img->cameraParams, nullptr);
+    frame = std::move(f);
+    return ENextStatus::Frame;
+  }
+  catch (const std::exception& e)
+  {
+    // Anything unexpected (e.g. an image MRPT cannot expose) skips that item, never escapes.
+    why = "error reading " + m.path + ": " + detail::mrptMessage(e.what());
+    return ENextStatus::Skipped;
+  }
+}
+
+camera::CCameraModel::Ptr CRawlogSource::calibration() const { return m_impl->calib; }
+
+std::optional<eval::TTrajectory> CRawlogSource::groundTruth() const
+{
+  if (m_impl->gt.empty()) return std::nullopt;
+  return m_impl->gt;
+}
+
+std::string CRawlogSource::describe() const
+{
+  const Impl& m = *m_impl;
+  std::ostringstream s;
+  s << "rawlog " << m.path << " (" << m.items << " observations in " << m.firstPassEntries
+    << " entries, " << (m.sensoryFrames ? "action/sensory-frame pairs" : "plain observations");
+  s << ", " << (m.calib ? m.calib->modelName() + " camera" : std::string("no calibration"));
+  if (!m.gt.empty()) s << ", ground truth " << m.gt.size() << " poses";
+  if (!m.damage.empty()) s << "; " << m.damage;
+  s << ")";
+  return s.str();
+}
+
+std::size_t CRawlogSource::sizeHint() const { return m_impl->items; }
+std::size_t CRawlogSource::entryCount() const { return m_impl->firstPassEntries; }
+const std::string& CRawlogSource::damage() const { return m_impl->damage; }
+bool CRawlogSource::hasSensoryFrames() const { return m_impl->sensoryFrames; }
+const std::vector<std::string>& CRawlogSource::warnings() const { return m_impl->warnings; }
+const std::string& CRawlogSource::imagesDirectory() const { return m_impl->imagesDir; }
+}  // namespace immslam::io
