@@ -145,3 +145,47 @@ TEST(InverseDepth, LinearityIndexFallsWithParallax)
   y[5] = -0.1;
   EXPECT_TRUE(std::isinf(linearityIndex(y, sigmaRho, Vec3::Zero())));
 }
+
+TEST(Robocentric, RayAndTransformJacobians)
+{
+  Rand R;
+  for (int t = 0; t < 30; ++t)
+  {
+    const Vec6 y = R.idFeature();
+    Mat36 J;
+    inverseDepthRay(y, &J);
+    MatX Jn = math::numericalJacobian([](const VecX& v) -> VecX { return inverseDepthRay(v); }, y);
+    EXPECT_LT((Jn - J).norm(), 1e-7);
+    // Same ray as the world form with the camera at the origin.
+    EXPECT_LT((inverseDepthRay(y) - inverseDepthInCamera(y, Vec3::Zero(), Vec4(1, 0, 0, 0))).norm(), 1e-14);
+
+    const Vec4 dq = math::quatFromRotationVector(R.vec3(0.1));
+    const Vec3 tr = R.vec3(0.1);
+    Mat6 Jy;
+    Mat63 Jt;
+    Mat64 Jdq;
+    const Vec6 y2 = transformInverseDepth(y, dq, tr, &Jy, &Jt, &Jdq);
+    // The same Euclidean point, re-expressed: p' = R^T (p - t).
+    EXPECT_LT((inverseDepthToPoint(y2) - math::quatToRotation(dq).transpose() * (inverseDepthToPoint(y) - tr)).norm(),
+              1e-10);
+    VecX x(13);
+    x << y, tr, dq;
+    Jn = math::numericalJacobian(
+        [](const VecX& v) -> VecX { return transformInverseDepth(v.head<6>(), v.tail<4>(), v.segment<3>(6)); }, x);
+    EXPECT_LT((Jn.leftCols(6) - Jy).norm(), 1e-7);
+    EXPECT_LT((Jn.middleCols(6, 3) - Jt).norm(), 1e-7);
+    EXPECT_LT((Jn.rightCols(4) - Jdq).norm(), 1e-7);
+
+    Mat3 Jp, Jt3;
+    Mat34 Jdq3;
+    const Vec3 p = R.vec3(2);
+    transformPoint(p, dq, tr, &Jp, &Jt3, &Jdq3);
+    VecX xp(10);
+    xp << p, tr, dq;
+    Jn = math::numericalJacobian(
+        [](const VecX& v) -> VecX { return transformPoint(v.head<3>(), v.tail<4>(), v.segment<3>(3)); }, xp);
+    EXPECT_LT((Jn.leftCols(3) - Jp).norm(), 1e-7);
+    EXPECT_LT((Jn.middleCols(3, 3) - Jt3).norm(), 1e-7);
+    EXPECT_LT((Jn.rightCols(4) - Jdq3).norm(), 1e-7);
+  }
+}

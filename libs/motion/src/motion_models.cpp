@@ -40,6 +40,37 @@ std::string TMotionModel::displayName() const
   return s.str();
 }
 
+TMotionIncrement motionIncrement(const TMotionModel& m, const Vec3& v, const Vec3& w, double dt, double focalPx)
+{
+  TMotionIncrement inc;
+  if (m.family == EMotionFamily::Stationary)
+  {
+    inc.identity = true;
+    return inc;
+  }
+  Mat43 J_exp;
+  inc.dq = math::quatFromRotationVector(w * dt, &J_exp);
+  inc.J_dq_u.rightCols<3>() = J_exp * dt;
+  const double sw = m.sigmaAngularPx / focalPx * dt;
+  inc.noiseCov.bottomRightCorner<3, 3>() = Mat3::Identity() * sw * sw;
+  inc.uNext.tail<3>() = w;
+  inc.J_uNext_u.bottomRightCorner<3, 3>().setIdentity();
+  if (m.family == EMotionFamily::General)
+  {
+    inc.t = v * dt;
+    inc.J_t_u.leftCols<3>() = Mat3::Identity() * dt;
+    // v' = R(dq)^T v = R(conj(dq)) v; chain rule through dq for dv'/dw.
+    Mat34 J_c;
+    Mat3 Rt;
+    inc.uNext.head<3>() = math::quatRotate(math::quatConjugate(inc.dq), v, &J_c, &Rt);
+    inc.J_uNext_u.topLeftCorner<3, 3>() = Rt;
+    inc.J_uNext_u.topRightCorner<3, 3>() = J_c * Vec4(1, -1, -1, -1).asDiagonal() * inc.J_dq_u.rightCols<3>();
+    const double sa = m.sigmaLinearPx / focalPx * dt;
+    inc.noiseCov.topLeftCorner<3, 3>() = Mat3::Identity() * sa * sa;
+  }
+  return inc;
+}
+
 Vec13 predictCamera(const TMotionModel& m, const Vec13& xv, double dt, double focalPx, Mat13* F, Mat13* Q)
 {
   Vec13 out = xv;

@@ -98,3 +98,39 @@ TEST(MotionModels, Names)
   EXPECT_EQ(familyFromName("rotation"), EMotionFamily::Rotation);
   EXPECT_THROW(familyFromName("spinning"), std::invalid_argument);
 }
+
+TEST(MotionIncrement, JacobiansAndAgreementWithWorldModel)
+{
+  std::mt19937 rng(21);
+  for (const auto& m : kModels)
+    for (int t = 0; t < 10; ++t)
+    {
+      const Vec13 x = randomCamera(rng);
+      const Vec3 v = x.segment<3>(kV), w = x.segment<3>(kW);
+      const double dt = 1.5;
+      const TMotionIncrement inc = motionIncrement(m, v, w, dt, 200);
+      VecX u(6);
+      u << v, w;
+      const auto fn = [&](const VecX& uu) -> VecX {
+        const auto i2 = motionIncrement(m, uu.head<3>(), uu.tail<3>(), dt, 200);
+        VecX out(13);
+        out << i2.t, i2.dq, i2.uNext;
+        return out;
+      };
+      const MatX Jn = math::numericalJacobian(fn, u);
+      if (!inc.identity)
+      {
+        EXPECT_LT((Jn.topRows(3) - inc.J_t_u).norm(), 1e-8) << m.displayName();
+        EXPECT_LT((Jn.middleRows(3, 4) - inc.J_dq_u).norm(), 1e-8) << m.displayName();
+        EXPECT_LT((Jn.bottomRows(6) - inc.J_uNext_u).norm(), 1e-8) << m.displayName();
+      }
+      // Same physical motion as the world-centred model: with v_W = R(q) v_C the new camera pose is
+      // r + R(q) t and q (x) dq.
+      Vec13 xw = x;
+      xw.segment<3>(kV) = math::quatRotate(x.segment<4>(kQ), v);
+      const Vec13 xn = predictCamera(m, xw, dt, 200);
+      if (m.family == EMotionFamily::General)
+        EXPECT_LT((xn.head<3>() - (x.head<3>() + math::quatRotate(x.segment<4>(kQ), inc.t))).norm(), 1e-12);
+      EXPECT_LT((xn.segment<4>(kQ) - math::quatMultiply(x.segment<4>(kQ), inc.dq)).norm(), 1e-12);
+    }
+}

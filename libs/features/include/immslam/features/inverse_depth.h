@@ -32,6 +32,23 @@ Vec3 inverseDepthToPoint(const Vec6& y, Mat36* J_y = nullptr);
 Vec3 inverseDepthInCamera(const Vec6& y, const Vec3& r, const Vec4& q, Mat36* J_y = nullptr,
                           Mat3* J_r = nullptr, Mat34* J_q = nullptr);
 
+/** Camera-centred form of the measurement's 3-D part: with the feature expressed in the current
+ * camera frame (robocentric state, the camera at the origin), \f$ h^C = \rho\, x_0 + m(\theta,\phi) \f$.
+ * \param J_y dh/dy (3x6). */
+Vec3 inverseDepthRay(const Vec6& y, Mat36* J_y = nullptr);
+
+/** A point re-expressed after a camera motion: the camera moved by (t, dq) in its own frame,
+ * \f$ p_{C_k} = R(dq)\, p_{C_{k+1}} + t \f$, so \f$ p' = R(dq)^\top (p - t) \f$.
+ * \param J_p dp'/dp (3x3), \param J_t dp'/dt (3x3), \param J_dq dp'/d(dq) (3x4). */
+Vec3 transformPoint(const Vec3& p, const Vec4& dq, const Vec3& t, Mat3* J_p = nullptr, Mat3* J_t = nullptr,
+                    Mat34* J_dq = nullptr);
+
+/** An inverse-depth feature re-expressed after the same camera motion: the anchor moves like a
+ * point, the ray direction rotates, rho is unchanged (it is the inverse distance from the anchor).
+ * \param J_y dy'/dy (6x6), \param J_t dy'/dt (6x3), \param J_dq dy'/d(dq) (6x4). */
+Vec6 transformInverseDepth(const Vec6& y, const Vec4& dq, const Vec3& t, Mat6* J_y = nullptr, Mat63* J_t = nullptr,
+                           Mat64* J_dq = nullptr);
+
 /** Euclidean feature in the camera frame: \f$ R_{CW}(p_W - r) \f$ with Jacobians. */
 Vec3 xyzInCamera(const Vec3& p_W, const Vec3& r, const Vec4& q, Mat3* J_p = nullptr,
                  Mat3* J_r = nullptr, Mat34* J_q = nullptr);

@@ -48,7 +48,35 @@ struct TMotionModel
   std::string displayName() const;
 };
 
-/** Camera-state prediction \f$ x_v' = f(x_v, n) \f$ of a model over dt frames, with
+using Mat36u = Eigen::Matrix<double, 3, 6>;
+using Mat46u = Eigen::Matrix<double, 4, 6>;
+using Vec6u = Eigen::Matrix<double, 6, 1>;
+using Mat6u = Eigen::Matrix<double, 6, 6>;
+
+/** The camera motion of one prediction step in the camera-centred (robocentric) formulation,
+ * where the velocities u = (v, w) are both expressed in the current camera frame C_k:
+ * the camera moves to C_{k+1} with \f$ p_{C_k} = R(dq)\, p_{C_{k+1}} + t \f$,
+ * \f$ t = (v + V)\,dt \f$ (general only) and \f$ dq = \exp((w + W)\,dt) \f$ (rotation, general), and the
+ * velocities become \f$ u' = (R(dq)^\top (v + V),\; w + W) \f$ (general), \f$ (0, w + W) \f$ (rotation) or
+ * 0 (stationary). The impulses (V, W) enter exactly like a perturbation of u, so the Jacobians with
+ * respect to u are also those with respect to the noise, whose covariance is `noiseCov`. */
+struct TMotionIncrement
+{
+  Vec3 t = Vec3::Zero();
+  Vec4 dq = Vec4(1, 0, 0, 0);
+  Mat36u J_t_u = Mat36u::Zero();
+  Mat46u J_dq_u = Mat46u::Zero();
+  Vec6u uNext = Vec6u::Zero();
+  Mat6u J_uNext_u = Mat6u::Zero();
+  Mat6u noiseCov = Mat6u::Zero();  ///< covariance of (V, W) in state units
+  bool identity = false;           ///< stationary: nothing moves
+};
+
+/** The increment of model m over dt frames from the velocities (v, w) in the camera frame. */
+TMotionIncrement motionIncrement(const TMotionModel& m, const Vec3& v, const Vec3& w, double dt, double focalPx);
+
+/** World-centred form of the same models (used to simulate ground truth and in tests):
+ * camera-state prediction \f$ x_v' = f(x_v, n) \f$ of a model over dt frames, with
  * \param F the transition Jacobian df/dx_v (13x13), \param Q the process noise covariance
  * \f$ G\,\mathrm{diag}(\sigma_a^2 dt^2 I, \sigma_\alpha^2 dt^2 I)\,G^\top \f$ (G = df/d(V, W)), in state
  * units (requires focalPx). The quaternion is normalized after the product (its Jacobian included in F). */

@@ -1,0 +1,245 @@
+/* imm-monoslam — IMM monocular EKF SLAM (Civera, Davison & Montiel, "Interacting Multiple Model
+ * Monocular SLAM", ../shared/papers/imm-monocular-slam.md).
+ *
+ * A bank of r full-covariance EKFs over the camera (r, q, v, w) and an inverse-depth / XYZ point
+ * map, in the dimensionless formulation, each under its own motion model (motion/motion_models.h),
+ * combined by the IMM (bayes::CIMMEstimator, paper Fig. 2). r = 1 is the single-model baseline
+ * (MonoSLAM-style EKF) with no special code path.
+ *
+ * Per frame (processFrame):
+ *  1. IMM mixing (Fig. 2 step 1) and mode-matched prediction of the camera block;
+ *  2. IMM-fused prediction (eqs. 10-11) and, per feature, h = h(x_hat) and S_i (eqs. 13-14): one
+ *     active search per feature inside its 95 % ellipse, shared by the whole bank;
+ *  3. 1-point RANSAC on the fused prediction -> low-innovation inliers; every mode is updated with
+ *     them (own linearization); high-innovation inliers are rescued with the updated fused estimate
+ *     and update every mode too;
+ *  4. model probabilities from the joint likelihood of all measurements of each mode (eq. 3);
+ *  5. map management: deletion of features that fail too often, inverse depth -> XYZ conversion
+ *     (linearity index, paper ref. [3]), bounded map size.
+ * New features are added by the caller (addFeaturesAt) so that a shadow filter can hold them first;
+ * findNewFeatureCandidates() proposes corners in empty image regions.
+ *
+ * The class does no file output and no GUI. */
+#pragma once
+
+#include <immslam/bayes/CIMMEstimator.h>
+#include <immslam/camera/CCameraModel.h>
+#include <immslam/frontend/frontend.h>
+#include <immslam/motion/motion_models.h>
+#include <immslam/slam/COnePointRansac.h>
+#include <immslam/slam/TFeature.h>
+
+#include <mrpt/config/CLoadableOptions.h>
+#include <opencv2/core/mat.hpp>
+
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace immslam::math
+{
+class CThreadPool;
+}
+
+namespace immslam::slam
+{
+/** What happened to one feature in one frame (for overlays and statistics). */
+struct TSearchRecord
+{
+  std::int64_t id = -1;
+  Vec2 h = Vec2::Zero();      ///< IMM-fused predicted pixel (eq. 13)
+  Mat2 S = Mat2::Identity();  ///< IMM-fused innovation covariance (eq. 14)
+  bool found = false;         ///< the active search found a match
+  Vec2 z = Vec2::Zero();      ///< measured pixel (when found)
+  enum class EStatus
+  {
+    NotFound,
+    LowInnovationInlier,
+    RescuedInlier,
+    Rejected
+  } status = EStatus::NotFound;
+};
+
+/** Per-frame figures (frame_stats.csv). */
+struct TFrameReport
+{
+  double timestamp = 0;
+  std::int64_t frame = 0;
+  int nMap = 0;              ///< features in the SLAM state after the frame
+  int nPredicted = 0;        ///< features predicted in the image and searched
+  int nFound = 0;            ///< searches that found a match
+  int nMatched = 0;          ///< measurements used in the update
+  int nRejected = 0;         ///< found matches rejected as outliers
+  int nLowInnovation = 0, nRescued = 0, nHypotheses = 0;
+  double meanSearchAreaPx2 = 0;  ///< mean of pi * 5.991 * sqrt(det S_i) over searched features
+  int nDepthKnown = 0;       ///< rho - 1.96 sigma_rho > 0, or XYZ
+  int nAdded = 0, nDeleted = 0, nConverted = 0;
+  double dtFrames = 1;       ///< elapsed time in nominal frame periods
+  double timeMs = 0;         ///< wall time of processFrame
+  // Stage timings (ms)
+  double tPredictMs = 0, tSearchMs = 0, tRansacMs = 0, tUpdateMs = 0, tMapMs = 0;
+  std::vector<TSearchRecord> searches;
+};
+
+/** Motion model bank of the IMM (section [imm]). */
+struct TIMMBankOptions : public mrpt::config::CLoadableOptions
+{
+  /** Space-separated model specs: `stationary`, `rotation:SIGMA_ANG_PX`,
+   * `general:SIGMA_PX` or `general:SIGMA_LIN_PX:SIGMA_ANG_PX`. */
+  std::string models = "stationary rotation:0.1 rotation:0.5 rotation:1 general:0.1 general:0.5 general:1";
+  /** r x r row-major Markov matrix pi(j, i) = P(i at k | j at k-1); empty: built from transition_stay. */
+  std::vector<double> transition_matrix;
+  /** Diagonal of the default Markov matrix; the rest of each row is spread evenly. */
+  double transition_stay = 0.98;
+  /** Initial model probabilities (empty: uniform). */
+  std::vector<double> prior;
+  /** Lower bound of every model probability (no model dies for ever). */
+  double probability_floor = 1e-4;
+
+  void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
+  void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
+
+  /** The parsed models. \throws std::runtime_error naming [imm] models. */
+  std::vector<motion::TMotionModel> parseModels() const;
+  /** The Markov matrix (r x r). \throws std::runtime_error naming the key. */
+  MatX transitionMatrix(int r) const;
+  VecX priorProbabilities(int r) const;
+};
+
+class CMonoSlamIMM
+{
+ public:
+  /** Options of the SLAM filter (section [slam]). Noise in pixels: the dimensionless formulation. */
+  struct TOptions : public mrpt::config::CLoadableOptions
+  {
+    double sigma_pixel = 1.0;                   ///< image measurement noise (px)
+    double init_rho = 1.0;                      ///< inverse-depth prior mean (dimensionless)
+    double init_rho_std = 1.0;                  ///< inverse-depth prior std: 95 % region includes rho = 0
+    double init_linear_velocity_std_px = 5.0;   ///< initial v std (image px/frame at unit depth)
+    double init_angular_velocity_std_px = 5.0;  ///< initial w std (image px/frame)
+    double frame_rate_hz = 0;                   ///< nominal frame rate; 0: from the first timestamps
+    int patch_half_size = 5;                    ///< 11x11 templates
+    bool warp_patches = true;                   ///< predict the patch appearance (affine warp)
+    double min_ncc = 0.8;                       ///< correlation threshold of a match
+    double search_probability = 0.95;           ///< search ellipse probability (2 dof)
+    double max_search_half_extent_px = 60;      ///< clip of pathological search regions
+    int fast_threshold = 20;
+    int grid_cols = 8, grid_rows = 6;           ///< new features go to empty cells of this grid
+    double min_corner_distance_px = 12;
+    int border_px = 10;
+    double min_shi_tomasi = 0.01;
+    int min_visible_features = 25;              ///< add features when fewer are predicted in view
+    int max_new_features_per_frame = 10;
+    int initial_features = 30;                  ///< features initialised at the first frame
+    int max_map_features = 150;                 ///< bound of the map (oldest-unseen evicted beyond)
+    int delete_min_predictions = 10;            ///< MonoSLAM deletion rule: after this many searches...
+    double delete_min_match_ratio = 0.5;        ///< ...delete if matched/predicted is below this
+    bool convert_to_xyz = true;
+    double linearity_threshold = 0.1;           ///< ID -> XYZ when the linearity index is below (ref. [3])
+    int num_threads = 2;                        ///< worker threads for the bank (1: none)
+    int seed = 1;                               ///< RANSAC random seed (determinism)
+
+    void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
+    void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
+    void validate(const std::string& section) const;
+  };
+
+  CMonoSlamIMM(const TOptions& opts, const TIMMBankOptions& bank, const COnePointRansac::TOptions& ransac,
+               camera::CCameraModel::Ptr cam);
+  ~CMonoSlamIMM();
+  CMonoSlamIMM(const CMonoSlamIMM&) = delete;
+  CMonoSlamIMM& operator=(const CMonoSlamIMM&) = delete;
+
+  /** Processes one frame: prediction, active search, 1-point RANSAC, updates, model probabilities,
+   * deletion/conversion. At the first frame only initialises the map (initial_features corners).
+   * \param grey 8-bit grey image of the camera's size. Returns the frame's report. */
+  const TFrameReport& processFrame(double timestamp, const cv::Mat& grey);
+
+  /** The filter step with externally associated measurements (known data association, no image):
+   * IMM mixing and prediction, one update of every mode with all the given measurements (no active
+   * search, no RANSAC), model probabilities, ID -> XYZ conversion. For measurement-level
+   * simulations (consistency tests) and for callers with their own front end.
+   * \param z (feature id, measured pixel) pairs; unknown ids are ignored. */
+  const TFrameReport& processMeasurements(double timestamp, const std::vector<std::pair<std::int64_t, Vec2>>& z);
+
+  /** Corners of the image in cells empty of current features (predicted positions), at most maxNew;
+   * `alsoOccupied` are extra positions to avoid (e.g. shadow-filter features). */
+  std::vector<frontend::TCorner> findNewFeatureCandidates(const cv::Mat& grey, int maxNew,
+                                                          const std::vector<Vec2>& alsoOccupied = {}) const;
+
+  /** Number of new features the map management wants now (0 if enough are visible). */
+  int wantedNewFeatures() const;
+
+  /** Adds inverse-depth features observed at pixels uv in `grey` (the current frame) to every mode
+   * (undelayed initialisation with each mode's own camera estimate). rho/sigmaRho per feature
+   * default to the [slam] prior. Returns the new ids (-1 where the patch did not fit). With an empty
+   * `grey` no patch is stored (features for processMeasurements only). */
+  std::vector<std::int64_t> addFeaturesAt(const cv::Mat& grey, const std::vector<Vec2>& uv,
+                                          const std::vector<std::pair<double, double>>& rhoPrior = {});
+
+  // ---- Results (IMM-fused posterior, paper Fig. 2 step 4) ----
+  /** Camera pose T_W_C: position and quaternion [qw qx qy qz] (from the fused T_C_W). */
+  Vec3 cameraPosition() const { return m_rWC; }
+  Vec4 cameraOrientation() const { return m_qWC; }
+  /** Covariance of [r_W_C; q_W_C] (7x7, first order through the inversion of T_C_W). */
+  Eigen::Matrix<double, 7, 7> cameraPoseCovariance() const;
+  /** Fused state mean (x only; cheap). The state is camera-centred: (r_CW, q_CW, v, w) then the
+   * features in the current camera frame. */
+  const VecX& fusedMean() const { return m_xFused; }
+  /** Fused covariance block of a state range (cheap, O(r len^2)). */
+  MatX fusedCovarianceBlock(int offset, int len) const;
+  /** Full fused covariance (O(r n^2)): for tests and consistency checks. */
+  MatX fusedCovariance() const;
+  /** Posterior model probabilities mu_k. */
+  VecX modelProbabilities() const;
+  const std::vector<motion::TMotionModel>& models() const { return m_models; }
+  const std::vector<TFeature>& features() const { return m_features; }
+  const TFrameReport& lastReport() const { return m_report; }
+  const camera::CCameraModel& camera() const { return *m_cam; }
+  const bayes::CIMMEstimator& bank() const { return *m_imm; }
+  const TOptions& options() const { return m_opts; }
+  /** True when the feature's depth is estimated: rho - 1.96 sigma_rho > 0, or XYZ. */
+  bool depthKnown(const TFeature& f) const;
+  /** Euclidean position of a feature in W (fused mean; rho clamped for points near infinity). */
+  Vec3 featurePosition(const TFeature& f) const;
+  /** Removes features by id from every mode (e.g. caught moving). */
+  void removeFeatures(const std::vector<std::int64_t>& ids);
+
+ private:
+  void initialiseState();
+  void predict(double dt);
+  void searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& cands);
+  void updateBank(const std::vector<TCandidate>& cands, const std::vector<int>& which, VecX& logLik);
+  std::vector<int> rescue(const std::vector<TCandidate>& cands, const std::vector<char>& used);
+  void manageMap();
+  void beginFrame(double timestamp);
+  void endFrame(std::chrono::steady_clock::time_point t0);
+  void refreshFused();
+  void updateWorldPose();
+  double frameDt(double timestamp);
+
+  TOptions m_opts;
+  COnePointRansac m_ransac;
+  camera::CCameraModel::Ptr m_cam;
+  std::vector<motion::TMotionModel> m_models;
+  std::unique_ptr<bayes::CIMMEstimator> m_imm;
+  std::unique_ptr<math::CThreadPool> m_pool;
+  std::vector<TFeature> m_features;
+  VecX m_xFused;         ///< fused posterior mean
+  VecX m_xPred;          ///< fused prediction (eq. 10) of the current frame
+  VecX m_rescueWeights;  ///< mode weights after the first update (for the rescue test)
+  MatX m_PPred;          ///< fused predicted covariance (eq. 11) of the current frame
+  std::vector<MatX> m_scratch;  ///< per-mode buffers of the prediction
+  Vec3 m_rWC = Vec3::Zero();    ///< fused camera pose T_W_C
+  Vec4 m_qWC = Vec4(1, 0, 0, 0);
+  TFrameReport m_report;
+  std::mt19937 m_rng;
+  std::int64_t m_frame = -1, m_nextId = 0;
+  double m_lastTimestamp = 0, m_framePeriod = 0;
+  std::vector<double> m_firstDeltas;
+  double m_focal = 1;
+};
+}  // namespace immslam::slam

@@ -1,0 +1,41 @@
+/* imm-monoslam — bookkeeping of one map feature of the SLAM state (the layout shared by every
+ * mode of the IMM bank). */
+#pragma once
+
+#include <immslam/frontend/frontend.h>
+#include <immslam/math/types.h>
+
+#include <cstdint>
+
+namespace immslam::slam
+{
+/** Parametrization of a feature in the state. */
+enum class EFeatureKind : std::uint8_t
+{
+  InverseDepth,  ///< 6-D (x0 y0 z0 theta phi rho), features/inverse_depth.h
+  XYZ            ///< 3-D Euclidean point in W
+};
+
+/** Size of a feature's block in the state vector. */
+constexpr int featureDim(EFeatureKind k) { return k == EFeatureKind::InverseDepth ? 6 : 3; }
+
+/** One map feature: where its block lives in the state, its appearance and its track record. */
+struct TFeature
+{
+  std::int64_t id = -1;
+  EFeatureKind kind = EFeatureKind::InverseDepth;
+  int offset = 0;  ///< index of the first element of its block in the state vector (every mode)
+
+  frontend::CFeaturePatch patch;  ///< appearance at its first observation
+  Vec3 r0 = Vec3::Zero();         ///< camera centre when the patch was taken (for warping)
+  Vec4 q0 = Vec4(1, 0, 0, 0);     ///< camera orientation when the patch was taken
+
+  double tInit = 0;           ///< timestamp of the first observation
+  std::int64_t frameInit = 0; ///< frame number of the first observation
+  int nPredicted = 0;         ///< frames it was predicted inside the image and searched
+  int nMatched = 0;           ///< frames its measurement was used in the update
+  std::int64_t lastSeenFrame = 0;  ///< last frame it was predicted inside the image
+
+  int dim() const { return featureDim(kind); }
+};
+}  // namespace immslam::slam

@@ -1,0 +1,241 @@
+/* imm-monoslam — IMM monocular EKF SLAM: one frame = mix, predict, search, 1-point RANSAC,
+ * update every mode, model probabilities (paper Fig. 2 and Sec. IV). Camera-centred state:
+ * x = (r_CW, q_CW, v, w, features in the current camera frame). */
+#include <immslam/features/inverse_depth.h>
+#include <immslam/math/chi2.h>
+#include <immslam/math/gaussian.h>
+#include <immslam/math/parallel.h>
+#include <immslam/math/quaternion.h>
+#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/slam/measurement.h>
+#include <immslam/slam/robocentric_prediction.h>
+#include <immslam/slam/state_ops.h>
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace immslam::slam
+{
+CMonoSlamIMM::CMonoSlamIMM(const TOptions& opts, const TIMMBankOptions& bank, const COnePointRansac::TOptions& ransac,
+                           camera::CCameraModel::Ptr cam)
+    : m_opts(opts), m_ransac(ransac), m_cam(std::move(cam)), m_rng(static_cast<unsigned>(opts.seed))
+{
+  if (!m_cam) throw std::invalid_argument("CMonoSlamIMM: no camera model");
+  m_opts.validate("slam");
+  m_models = bank.parseModels();
+  const int r = static_cast<int>(m_models.size());
+  m_imm = std::make_unique<bayes::CIMMEstimator>(bank.transitionMatrix(r), bank.priorProbabilities(r),
+                                                 r > 1 ? bank.probability_floor : 0.0);
+  m_pool = std::make_unique<math::CThreadPool>(static_cast<unsigned>(m_opts.num_threads));
+  m_scratch.resize(r);
+  m_focal = 0.5 * (m_cam->fx() + m_cam->fy());
+  initialiseState();
+}
+
+CMonoSlamIMM::~CMonoSlamIMM() = default;
+
+void CMonoSlamIMM::initialiseState()
+{
+  // World frame = first camera frame, known exactly (gauge); velocities with their priors.
+  VecX x = VecX::Zero(motion::kCamDim);
+  x[motion::kQ] = 1.0;
+  MatX P = MatX::Zero(motion::kCamDim, motion::kCamDim);
+  const double sv = m_opts.init_linear_velocity_std_px / m_focal;
+  const double sw = m_opts.init_angular_velocity_std_px / m_focal;
+  P.block<3, 3>(motion::kV, motion::kV) = Mat3::Identity() * sv * sv;
+  P.block<3, 3>(motion::kW, motion::kW) = Mat3::Identity() * sw * sw;
+  m_imm->setAllModes(x, P);
+  m_features.clear();
+  m_xFused = x;
+  updateWorldPose();
+}
+
+double CMonoSlamIMM::frameDt(double t)
+{
+  const double delta = t - m_lastTimestamp;
+  m_lastTimestamp = t;
+  if (m_opts.frame_rate_hz > 0)
+    m_framePeriod = 1.0 / m_opts.frame_rate_hz;
+  else if (delta > 0 && m_firstDeltas.size() < 9)
+  {
+    // Nominal period: median of the first deltas (robust to one dropped frame early on).
+    m_firstDeltas.push_back(delta);
+    std::vector<double> d = m_firstDeltas;
+    std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+    m_framePeriod = d[d.size() / 2];
+  }
+  if (!(delta > 0) || !(m_framePeriod > 0)) return 1.0;  // non-increasing timestamps: one frame
+  return std::clamp(delta / m_framePeriod, 0.05, 1000.0);
+}
+
+void CMonoSlamIMM::predict(double dt)
+{
+  const int r = m_imm->numModels();
+  m_imm->mix(m_pool.get());
+  m_pool->parallelFor(0, r, [&](int i) {
+    auto& g = m_imm->mode(i);
+    const auto inc = motion::motionIncrement(m_models[i], g.x.segment<3>(motion::kV), g.x.segment<3>(motion::kW), dt,
+                                             m_focal);
+    predictRobocentric(g, m_features, inc, m_scratch[i]);
+  });
+  // IMM-fused prediction (paper eqs. 10-11): the search regions of the whole bank.
+  if (r == 1)
+    m_xPred = m_imm->mode(0).x;
+  else
+    m_imm->combine(m_imm->predictedProbabilities(), m_xPred, &m_PPred, m_pool.get());
+}
+
+void CMonoSlamIMM::searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& cands)
+{
+  const MatX& P = m_imm->numModels() == 1 ? m_imm->mode(0).P : m_PPred;
+  Vec3 r_WC;
+  Vec4 q_WC;
+  worldPoseFromState(m_xPred, r_WC, q_WC);
+  q_WC.normalize();
+  frontend::TSearchParams sp;
+  sp.gateChi2 = math::chi2Quantile(m_opts.search_probability, 2);
+  sp.minScore = m_opts.min_ncc;
+  sp.maxHalfExtentPx = m_opts.max_search_half_extent_px;
+  const double margin = m_opts.patch_half_size + 1;
+
+  // Predict every feature (cheap), then search the visible ones (the image work) in parallel.
+  struct TJob
+  {
+    int k;
+    Vec2 h;
+    Mat2F Jf;
+    Mat2 S;
+    frontend::TSearchResult res;
+  };
+  std::vector<TJob> jobs;
+  jobs.reserve(m_features.size());
+  for (int k = 0; k < static_cast<int>(m_features.size()); ++k)
+  {
+    TJob j;
+    j.k = k;
+    if (!m_features[k].patch.valid()) continue;
+    if (!predictMeasurement(*m_cam, m_xPred, m_features[k], j.h, &j.Jf)) continue;
+    if (!m_cam->isInImage(j.h, margin)) continue;
+    j.S = innovationCovariance(P, m_features[k], j.Jf, m_opts.sigma_pixel);
+    jobs.push_back(j);
+  }
+  m_pool->parallelFor(0, static_cast<int>(jobs.size()), [&](int idx) {
+    TJob& j = jobs[idx];
+    const TFeature& f = m_features[j.k];
+    Mat2 A = Mat2::Identity();
+    if (m_opts.warp_patches)
+    {
+      const Vec3 p = math::quatRotate(q_WC, featurePointInCamera(m_xPred, f)) + r_WC;
+      Vec3 n = f.r0 - p;
+      if (n.norm() > 0) n.normalize();
+      A = frontend::patchWarp(*m_cam, f.r0, f.q0, r_WC, q_WC, p, n);
+    }
+    j.res = frontend::searchInEllipse(grey, f.patch.predictTemplate(A), j.h, j.S, sp);
+  });
+
+  double areaSum = 0;
+  for (const auto& j : jobs)
+  {
+    TFeature& f = m_features[j.k];
+    f.nPredicted++;
+    f.lastSeenFrame = m_frame;
+    areaSum += frontend::ellipseArea(j.S, sp.gateChi2);
+    TSearchRecord rec;
+    rec.id = f.id;
+    rec.h = j.h;
+    rec.S = j.S;
+    rec.found = j.res.found;
+    rec.z = j.res.uv;
+    m_report.searches.push_back(rec);
+    if (j.res.found) cands.push_back(TCandidate{j.k, j.res.uv, j.h, j.Jf, j.S});
+  }
+  m_report.nPredicted = static_cast<int>(jobs.size());
+  m_report.meanSearchAreaPx2 = jobs.empty() ? 0.0 : areaSum / jobs.size();
+  m_report.nFound = static_cast<int>(cands.size());
+}
+
+void CMonoSlamIMM::updateBank(const std::vector<TCandidate>& cands, const std::vector<int>& which, VecX& logLik)
+{
+  const int r = m_imm->numModels();
+  if (which.empty()) return;
+  // Every mode must be able to predict every measurement: same data for all likelihoods.
+  std::vector<int> use;
+  for (int c : which)
+  {
+    bool ok = true;
+    for (int i = 0; i < r && ok; ++i)
+    {
+      Vec2 uv;
+      ok = predictMeasurement(*m_cam, m_imm->mode(i).x, m_features[cands[c].feature], uv);
+    }
+    if (ok) use.push_back(c);
+  }
+  const int m = static_cast<int>(use.size());
+  if (m == 0) return;
+  const VecX Rdiag = VecX::Constant(2 * m, m_opts.sigma_pixel * m_opts.sigma_pixel);
+  m_pool->parallelFor(0, r, [&](int i) {
+    auto& g = m_imm->mode(i);
+    bayes::CSparseJacobian H(2 * m, static_cast<int>(g.x.size()));
+    VecX nu(2 * m);
+    for (int a = 0; a < m; ++a)
+    {
+      const TCandidate& c = cands[use[a]];
+      const TFeature& f = m_features[c.feature];
+      Vec2 h;
+      Mat2F Jf;
+      predictMeasurement(*m_cam, g.x, f, h, &Jf);  // each mode linearizes at its own estimate
+      nu.segment<2>(2 * a) = c.z - h;
+      H.addBlock(2 * a, f.offset, Jf);
+    }
+    const auto res = bayes::ekfUpdate(g.x, g.P, H, nu, Rdiag);
+    logLik[i] += res.ok ? res.logLikelihood : -std::numeric_limits<double>::infinity();
+    normalizeQuaternion(g);
+  });
+  for (int c : use) m_features[cands[c].feature].nMatched++;
+  m_report.nMatched += m;
+}
+
+std::vector<int> CMonoSlamIMM::rescue(const std::vector<TCandidate>& cands, const std::vector<char>& used)
+{
+  // Fused estimate after the first update with weights w (eqs. 10-11 applied to the updated modes).
+  const int r = m_imm->numModels();
+  const VecX& w = m_rescueWeights;
+  VecX xf = m_imm->mode(0).x;
+  if (r > 1) m_imm->combine(w, xf, nullptr);
+  const double gate = math::chi2Quantile(m_ransac.options().rescue_probability, 2);
+  std::vector<int> out;
+  for (int c = 0; c < static_cast<int>(cands.size()); ++c)
+  {
+    if (used[c]) continue;
+    const TFeature& f = m_features[cands[c].feature];
+    Vec2 h;
+    Mat2F Jf;
+    if (!predictMeasurement(*m_cam, xf, f, h, &Jf)) continue;
+    Mat2 S = Mat2::Zero();
+    for (int i = 0; i < r; ++i)
+    {
+      const auto& g = m_imm->mode(i);
+      S += w[i] * innovationCovariance(g.P, f, Jf, 0.0);
+      if (r > 1)
+      {
+        // Spread term H (x_i - x)(x_i - x)^T H^T of eq. (11) through the sparse H.
+        const Vec2 hd = Jf * (g.x.segment(f.offset, f.dim()) - xf.segment(f.offset, f.dim()));
+        S += w[i] * hd * hd.transpose();
+      }
+    }
+    S.diagonal().array() += m_opts.sigma_pixel * m_opts.sigma_pixel;
+    const Vec2 nu = cands[c].z - h;
+    if (nu.dot(S.ldlt().solve(nu)) < gate) out.push_back(c);
+  }
+  return out;
+}
+
+void CMonoSlamIMM::updateWorldPose()
+{
+  worldPoseFromState(m_xFused, m_rWC, m_qWC);
+  m_qWC.normalize();
+}
+}  // namespace immslam::slam

@@ -1,0 +1,409 @@
+/* imm-monoslam — map management of the IMM SLAM bank: new features, deletion, ID -> XYZ
+ * conversion (paper Sec. IV-2), and the per-frame driver. */
+#include <immslam/features/inverse_depth.h>
+#include <immslam/math/gaussian.h>
+#include <immslam/math/quaternion.h>
+#include <immslam/math/parallel.h>
+#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/slam/measurement.h>
+#include <immslam/slam/state_ops.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+#include <sstream>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace immslam::slam
+{
+namespace
+{
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0)
+{
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+}  // namespace
+
+void CMonoSlamIMM::beginFrame(double timestamp)
+{
+  ++m_frame;
+  m_report = TFrameReport();
+  m_report.timestamp = timestamp;
+  m_report.frame = m_frame;
+}
+
+void CMonoSlamIMM::endFrame(Clock::time_point t0)
+{
+  refreshFused();
+  m_report.nMap = static_cast<int>(m_features.size());
+  m_report.nDepthKnown = 0;
+  for (const auto& f : m_features) m_report.nDepthKnown += depthKnown(f) ? 1 : 0;
+  m_report.timeMs = msSince(t0);
+}
+
+const TFrameReport& CMonoSlamIMM::processMeasurements(double timestamp,
+                                                       const std::vector<std::pair<std::int64_t, Vec2>>& z)
+{
+  const auto t0 = Clock::now();
+  beginFrame(timestamp);
+  if (m_frame == 0)
+    m_lastTimestamp = timestamp;
+  else
+  {
+    m_report.dtFrames = frameDt(timestamp);
+    predict(m_report.dtFrames);
+    std::unordered_map<std::int64_t, int> index;
+    for (int k = 0; k < static_cast<int>(m_features.size()); ++k) index[m_features[k].id] = k;
+    std::vector<TCandidate> cands;
+    for (const auto& [id, uv] : z)
+    {
+      const auto it = index.find(id);
+      if (it == index.end()) continue;
+      TCandidate c;
+      c.feature = it->second;
+      c.z = uv;
+      cands.push_back(c);
+      m_features[c.feature].nPredicted++;
+      m_features[c.feature].lastSeenFrame = m_frame;
+    }
+    m_report.nPredicted = m_report.nFound = static_cast<int>(cands.size());
+    std::vector<int> all(cands.size());
+    std::iota(all.begin(), all.end(), 0);
+    VecX logLik = VecX::Zero(m_imm->numModels());
+    updateBank(cands, all, logLik);
+    if (m_imm->numModels() > 1) m_imm->updateProbabilities(logLik);
+    refreshFused();
+    const int minPred = m_opts.delete_min_predictions;
+    m_opts.delete_min_predictions = std::numeric_limits<int>::max();  // no deletion: known association
+    manageMap();
+    m_opts.delete_min_predictions = minPred;
+  }
+  endFrame(t0);
+  return m_report;
+}
+
+const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& grey)
+{
+  if (grey.type() != CV_8UC1 || grey.cols != m_cam->width() || grey.rows != m_cam->height())
+  {
+    std::ostringstream s;
+    s << "image of " << grey.cols << "x" << grey.rows << " (type " << grey.type() << ") does not match the "
+      << m_cam->width() << "x" << m_cam->height() << " 8-bit grey camera";
+    throw std::runtime_error(s.str());
+  }
+  const auto t0 = Clock::now();
+  beginFrame(timestamp);
+
+  if (m_frame == 0)
+  {
+    // Start on the fly, no known pattern: corners of the first image at the inverse-depth prior.
+    m_lastTimestamp = timestamp;
+    m_xPred = m_xFused;
+    const auto corners = findNewFeatureCandidates(grey, m_opts.initial_features);
+    std::vector<Vec2> uv;
+    for (const auto& c : corners) uv.push_back(c.uv);
+    addFeaturesAt(grey, uv);
+  }
+  else
+  {
+    m_report.dtFrames = frameDt(timestamp);
+    auto t = Clock::now();
+    predict(m_report.dtFrames);
+    m_report.tPredictMs = msSince(t);
+
+    t = Clock::now();
+    std::vector<TCandidate> cands;
+    searchFeatures(grey, cands);
+    m_report.tSearchMs = msSince(t);
+
+    t = Clock::now();
+    const MatX& Pp = m_imm->numModels() == 1 ? m_imm->mode(0).P : m_PPred;
+    const std::vector<int> low = m_ransac.lowInnovationInliers(*m_cam, m_xPred, Pp, m_features, cands, m_rng,
+                                                               &m_report.nHypotheses);
+    m_report.tRansacMs = msSince(t);
+
+    t = Clock::now();
+    const int r = m_imm->numModels();
+    VecX logLik = VecX::Zero(r);
+    updateBank(cands, low, logLik);
+    m_report.nLowInnovation = m_report.nMatched;
+    std::vector<char> used(cands.size(), 0);
+    for (int c : low) used[c] = 1;
+    // Weights for the rescue test: mu_{k|k-1} L^(1) normalized in log space.
+    m_rescueWeights = VecX::Ones(r);
+    if (r > 1)
+    {
+      VecX a(r);
+      for (int i = 0; i < r; ++i) a[i] = std::log(std::max(m_imm->predictedProbabilities()[i], 1e-300)) + logLik[i];
+      const double lse = math::logSumExp(a);
+      m_rescueWeights = std::isfinite(lse) ? VecX((a.array() - lse).exp()) : m_imm->predictedProbabilities();
+    }
+    const std::vector<int> high = rescue(cands, used);
+    updateBank(cands, high, logLik);
+    m_report.nRescued = m_report.nMatched - m_report.nLowInnovation;
+    if (r > 1) m_imm->updateProbabilities(logLik);
+    m_report.nRejected = m_report.nFound - m_report.nMatched;
+    for (int c : low) used[c] = 1;
+    // Record the status of each search.
+    {
+      std::vector<char> isHigh(cands.size(), 0);
+      for (int c : high) isHigh[c] = 1;
+      std::unordered_map<std::int64_t, int> candOf;
+      for (int c = 0; c < static_cast<int>(cands.size()); ++c) candOf[m_features[cands[c].feature].id] = c;
+      for (auto& rec : m_report.searches)
+      {
+        if (!rec.found) continue;
+        const int c = candOf[rec.id];
+        rec.status = used[c] ? TSearchRecord::EStatus::LowInnovationInlier
+                             : isHigh[c] ? TSearchRecord::EStatus::RescuedInlier : TSearchRecord::EStatus::Rejected;
+      }
+    }
+    m_report.tUpdateMs = msSince(t);
+
+    t = Clock::now();
+    refreshFused();
+    manageMap();
+    m_report.tMapMs = msSince(t);
+  }
+  endFrame(t0);
+  return m_report;
+}
+
+void CMonoSlamIMM::refreshFused()
+{
+  if (m_imm->numModels() == 1)
+    m_xFused = m_imm->mode(0).x;
+  else
+    m_imm->combine(m_imm->probabilities(), m_xFused, nullptr);
+  // The fused quaternion is a weighted mean of unit quaternions: renormalize the mean.
+  m_xFused.segment<4>(3).normalize();
+  updateWorldPose();
+}
+
+void CMonoSlamIMM::manageMap()
+{
+  // 1. Deletion (MonoSLAM rule, paper ref. [6]): searched often, matched rarely.
+  std::vector<char> drop(m_features.size(), 0);
+  for (std::size_t k = 0; k < m_features.size(); ++k)
+  {
+    const auto& f = m_features[k];
+    if (f.nPredicted >= m_opts.delete_min_predictions &&
+        f.nMatched < m_opts.delete_min_match_ratio * f.nPredicted)
+      drop[k] = 1;
+  }
+  // 2. Inverse depth -> XYZ when the linearity index is small (paper ref. [3]).
+  std::vector<char> convert(m_features.size(), 0);
+  if (m_opts.convert_to_xyz)
+  {
+    const Vec3 r = Vec3::Zero();  // camera-centred: the current camera is the origin
+    const VecX& mu = m_imm->probabilities();
+    for (std::size_t k = 0; k < m_features.size(); ++k)
+    {
+      const auto& f = m_features[k];
+      if (drop[k] || f.kind != EFeatureKind::InverseDepth) continue;
+      const double varRho = m_imm->numModels() == 1 ? m_imm->mode(0).P(f.offset + 5, f.offset + 5)
+                                                    : m_imm->combinedBlock(mu, m_xFused, f.offset + 5, 1)(0, 0);
+      const double L = features::linearityIndex(m_xFused.segment<6>(f.offset), std::sqrt(std::max(varRho, 0.0)), r);
+      if (L < m_opts.linearity_threshold) convert[k] = 1;
+    }
+  }
+  m_report.nDeleted = static_cast<int>(std::count(drop.begin(), drop.end(), 1));
+  m_report.nConverted = static_cast<int>(std::count(convert.begin(), convert.end(), 1));
+  if (!m_report.nDeleted && !m_report.nConverted) return;
+
+  // One re-parametrization per mode: copies of unchanged runs, converted blocks, dropped ones omitted.
+  const int r = m_imm->numModels();
+  m_pool->parallelFor(0, r, [&](int i) {
+    auto& g = m_imm->mode(i);
+    std::vector<TReparamSegment> segs;
+    int runStart = 0, runLen = motion::kCamDim;
+    auto flush = [&] {
+      if (runLen > 0) segs.push_back(TReparamSegment{runStart, runLen, true, {}, {}});
+      runLen = 0;
+    };
+    for (std::size_t k = 0; k < m_features.size(); ++k)
+    {
+      const auto& f = m_features[k];
+      if (!drop[k] && !convert[k])
+      {
+        if (runLen == 0) runStart = f.offset;
+        runLen += f.dim();
+        continue;
+      }
+      flush();
+      if (convert[k])
+      {
+        features::Mat36 J;
+        TReparamSegment s{f.offset, 6, false, {}, {}};
+        s.newValue = features::inverseDepthToPoint(g.x.segment<6>(f.offset), &J);
+        s.J = J;
+        segs.push_back(std::move(s));
+      }
+    }
+    flush();
+    reparametrize(g, segs);
+  });
+  std::vector<TFeature> kept;
+  kept.reserve(m_features.size());
+  int off = motion::kCamDim;
+  for (std::size_t k = 0; k < m_features.size(); ++k)
+  {
+    if (drop[k]) continue;
+    TFeature f = std::move(m_features[k]);
+    if (convert[k]) f.kind = EFeatureKind::XYZ;
+    f.offset = off;
+    off += f.dim();
+    kept.push_back(std::move(f));
+  }
+  m_features = std::move(kept);
+}
+
+void CMonoSlamIMM::removeFeatures(const std::vector<std::int64_t>& ids)
+{
+  const std::unordered_set<std::int64_t> del(ids.begin(), ids.end());
+  std::vector<TReparamSegment> segs{TReparamSegment{0, motion::kCamDim, true, {}, {}}};
+  std::vector<TFeature> kept;
+  int off = motion::kCamDim;
+  for (auto& f : m_features)
+  {
+    if (del.count(f.id)) continue;
+    segs.push_back(TReparamSegment{f.offset, f.dim(), true, {}, {}});
+    f.offset = off;
+    off += f.dim();
+    kept.push_back(std::move(f));
+  }
+  if (kept.size() == m_features.size()) return;
+  m_pool->parallelFor(0, m_imm->numModels(), [&](int i) { reparametrize(m_imm->mode(i), segs); });
+  m_features = std::move(kept);
+  refreshFused();
+}
+
+std::vector<frontend::TCorner> CMonoSlamIMM::findNewFeatureCandidates(const cv::Mat& grey, int maxNew,
+                                                                      const std::vector<Vec2>& alsoOccupied) const
+{
+  std::vector<Vec2> occupied = alsoOccupied;
+  for (const auto& rec : m_report.searches) occupied.push_back(rec.found ? rec.z : rec.h);
+  // Features not searched this frame but predicted inside the image still occupy their cell.
+  for (const auto& f : m_features)
+  {
+    Vec2 uv;
+    if (f.lastSeenFrame != m_frame && predictMeasurement(*m_cam, m_xFused, f, uv) && m_cam->isInImage(uv))
+      occupied.push_back(uv);
+  }
+  frontend::TDetectorParams p;
+  p.fastThreshold = m_opts.fast_threshold;
+  p.gridCols = m_opts.grid_cols;
+  p.gridRows = m_opts.grid_rows;
+  p.minDistancePx = m_opts.min_corner_distance_px;
+  p.borderPx = std::max(m_opts.border_px, 2 * m_opts.patch_half_size + 1);
+  p.minShiTomasi = m_opts.min_shi_tomasi;
+  return frontend::detectInEmptyCells(grey, occupied, maxNew, p);
+}
+
+int CMonoSlamIMM::wantedNewFeatures() const
+{
+  if (m_frame < 0) return m_opts.initial_features;
+  const int visible = m_report.nPredicted;
+  return std::clamp(m_opts.min_visible_features - visible, 0, m_opts.max_new_features_per_frame);
+}
+
+std::vector<std::int64_t> CMonoSlamIMM::addFeaturesAt(const cv::Mat& grey, const std::vector<Vec2>& uvs,
+                                                      const std::vector<std::pair<double, double>>& rhoPrior)
+{
+  std::vector<std::int64_t> ids(uvs.size(), -1);
+  // Bounded map: evict the features unseen for longest (not visible now) to make room.
+  const int room = m_opts.max_map_features - static_cast<int>(m_features.size());
+  if (room < static_cast<int>(uvs.size()))
+  {
+    std::vector<std::pair<std::int64_t, std::int64_t>> byAge;  // (lastSeenFrame, id)
+    for (const auto& f : m_features)
+      if (f.lastSeenFrame < m_frame) byAge.emplace_back(f.lastSeenFrame, f.id);
+    std::sort(byAge.begin(), byAge.end());
+    std::vector<std::int64_t> evict;
+    for (std::size_t i = 0; i < byAge.size() && static_cast<int>(evict.size()) < static_cast<int>(uvs.size()) - room; ++i)
+      evict.push_back(byAge[i].second);
+    removeFeatures(evict);
+  }
+  const int capacity = m_opts.max_map_features - static_cast<int>(m_features.size());
+
+  std::vector<TNewRay> rays;
+  std::vector<TFeature> fresh;
+  for (std::size_t i = 0; i < uvs.size() && static_cast<int>(fresh.size()) < capacity; ++i)
+  {
+    TFeature f;
+    if (!grey.empty() && !f.patch.extract(grey, uvs[i], m_opts.patch_half_size)) continue;
+    TNewRay ray;
+    ray.b_C = m_cam->unproject(uvs[i], &ray.J_b_uv).unitVector();
+    ray.rho = i < rhoPrior.size() ? rhoPrior[i].first : m_opts.init_rho;
+    ray.sigmaRho = i < rhoPrior.size() ? rhoPrior[i].second : m_opts.init_rho_std;
+    ray.sigmaPixel = m_opts.sigma_pixel;
+    rays.push_back(ray);
+    f.id = m_nextId++;
+    f.kind = EFeatureKind::InverseDepth;
+    f.r0 = m_rWC;
+    f.q0 = m_qWC;
+    f.tInit = m_lastTimestamp;
+    f.frameInit = m_frame;
+    f.lastSeenFrame = m_frame;
+    ids[i] = f.id;
+    fresh.push_back(std::move(f));
+  }
+  if (rays.empty()) return ids;
+  int off = static_cast<int>(m_imm->mode(0).x.size());
+  for (auto& f : fresh)
+  {
+    f.offset = off;
+    off += 6;
+  }
+  // Undelayed initialisation in every mode with that mode's own camera estimate.
+  m_pool->parallelFor(0, m_imm->numModels(), [&](int i) { appendInverseDepthFeatures(m_imm->mode(i), rays); });
+  for (auto& f : fresh) m_features.push_back(std::move(f));
+  m_report.nAdded += static_cast<int>(rays.size());
+  refreshFused();
+  return ids;
+}
+
+Eigen::Matrix<double, 7, 7> CMonoSlamIMM::cameraPoseCovariance() const
+{
+  Vec3 r;
+  Vec4 q;
+  Eigen::Matrix<double, 7, 7> J;
+  worldPoseFromState(m_xFused, r, q, &J);
+  return J * fusedCovarianceBlock(0, 7) * J.transpose();
+}
+
+MatX CMonoSlamIMM::fusedCovarianceBlock(int offset, int len) const
+{
+  if (m_imm->numModels() == 1) return m_imm->mode(0).P.block(offset, offset, len, len);
+  return m_imm->combinedBlock(m_imm->probabilities(), m_xFused, offset, len);
+}
+
+MatX CMonoSlamIMM::fusedCovariance() const
+{
+  if (m_imm->numModels() == 1) return m_imm->mode(0).P;
+  VecX x;
+  MatX P;
+  m_imm->combine(m_imm->probabilities(), x, &P, m_pool.get());
+  return P;
+}
+
+VecX CMonoSlamIMM::modelProbabilities() const { return m_imm->probabilities(); }
+
+bool CMonoSlamIMM::depthKnown(const TFeature& f) const
+{
+  if (f.kind == EFeatureKind::XYZ) return true;
+  const double rho = m_xFused[f.offset + 5];
+  const double var = fusedCovarianceBlock(f.offset + 5, 1)(0, 0);
+  return rho - 1.96 * std::sqrt(std::max(var, 0.0)) > 0;
+}
+
+Vec3 CMonoSlamIMM::featurePosition(const TFeature& f) const
+{
+  return math::quatRotate(m_qWC, featurePointInCamera(m_xFused, f)) + m_rWC;
+}
+}  // namespace immslam::slam

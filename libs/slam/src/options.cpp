@@ -1,0 +1,235 @@
+/* imm-monoslam — options of the SLAM filter ([slam]) and of the IMM bank ([imm]). */
+#include <immslam/core/config.h>
+#include <immslam/math/chi2.h>
+#include <immslam/slam/CMonoSlamIMM.h>
+
+#include <cmath>
+#include <sstream>
+
+namespace immslam::slam
+{
+void CMonoSlamIMM::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+  IMMSLAM_LOAD_DOUBLE(sigma_pixel);
+  IMMSLAM_LOAD_DOUBLE(init_rho);
+  IMMSLAM_LOAD_DOUBLE(init_rho_std);
+  IMMSLAM_LOAD_DOUBLE(init_linear_velocity_std_px);
+  IMMSLAM_LOAD_DOUBLE(init_angular_velocity_std_px);
+  IMMSLAM_LOAD_DOUBLE(frame_rate_hz);
+  IMMSLAM_LOAD_INT(patch_half_size);
+  IMMSLAM_LOAD_BOOL(warp_patches);
+  IMMSLAM_LOAD_DOUBLE(min_ncc);
+  IMMSLAM_LOAD_DOUBLE(search_probability);
+  IMMSLAM_LOAD_DOUBLE(max_search_half_extent_px);
+  IMMSLAM_LOAD_INT(fast_threshold);
+  IMMSLAM_LOAD_INT(grid_cols);
+  IMMSLAM_LOAD_INT(grid_rows);
+  IMMSLAM_LOAD_DOUBLE(min_corner_distance_px);
+  IMMSLAM_LOAD_INT(border_px);
+  IMMSLAM_LOAD_DOUBLE(min_shi_tomasi);
+  IMMSLAM_LOAD_INT(min_visible_features);
+  IMMSLAM_LOAD_INT(max_new_features_per_frame);
+  IMMSLAM_LOAD_INT(initial_features);
+  IMMSLAM_LOAD_INT(max_map_features);
+  IMMSLAM_LOAD_INT(delete_min_predictions);
+  IMMSLAM_LOAD_DOUBLE(delete_min_match_ratio);
+  IMMSLAM_LOAD_BOOL(convert_to_xyz);
+  IMMSLAM_LOAD_DOUBLE(linearity_threshold);
+  IMMSLAM_LOAD_INT(num_threads);
+  IMMSLAM_LOAD_INT(seed);
+  validate(s);
+}
+
+void CMonoSlamIMM::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
+{
+  MRPT_SAVE_CONFIG_VAR_COMMENT(sigma_pixel, "image measurement noise std (px)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(init_rho, "inverse-depth prior mean (dimensionless: 1 = unit depth)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(init_rho_std, "inverse-depth prior std (its 95% region must include rho = 0)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(init_linear_velocity_std_px, "initial linear velocity std (px/frame at unit depth)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(init_angular_velocity_std_px, "initial angular velocity std (px/frame)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(frame_rate_hz, "nominal frame rate (Hz); 0 = from the first timestamps");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(patch_half_size, "template half size (5 -> 11x11 px)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(warp_patches, "predict patch appearance by an affine warp");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(min_ncc, "minimum zero-mean NCC of a match");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(search_probability, "probability of the search ellipse (2 dof)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(max_search_half_extent_px, "clip of very large search regions (px)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(fast_threshold, "FAST corner threshold (grey levels)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(grid_cols, "new features go to empty cells of a grid_cols x grid_rows grid");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(grid_rows, "");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(min_corner_distance_px, "minimum distance of a new feature to others (px)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(border_px, "no new features closer to the border (px)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(min_shi_tomasi, "minimum normalized Shi-Tomasi response of a new feature");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(min_visible_features, "add features when fewer are predicted in the image");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(max_new_features_per_frame, "");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(initial_features, "features initialised at the first frame");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(max_map_features, "map size bound (longest-unseen features evicted)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(delete_min_predictions, "deletion rule: after this many searches...");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(delete_min_match_ratio, "...delete when matched/searched is below this");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(convert_to_xyz, "convert inverse depth to XYZ when linear");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(linearity_threshold, "linearity index threshold of the conversion");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(num_threads, "worker threads of the IMM bank (1 = no threads)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(seed, "random seed (1-point RANSAC)");
+}
+
+void CMonoSlamIMM::TOptions::validate(const std::string& s) const
+{
+  core::requirePositive(sigma_pixel, s, "sigma_pixel");
+  core::requirePositive(init_rho_std, s, "init_rho_std");
+  if (!std::isfinite(init_rho)) core::requirePositive(init_rho, s, "init_rho");
+  core::requireNonNegative(init_linear_velocity_std_px, s, "init_linear_velocity_std_px");
+  core::requireNonNegative(init_angular_velocity_std_px, s, "init_angular_velocity_std_px");
+  core::requireNonNegative(frame_rate_hz, s, "frame_rate_hz");
+  core::requireInRange(patch_half_size, 2, 15, s, "patch_half_size");
+  core::requireInRange(min_ncc, -1, 1, s, "min_ncc");
+  core::requireInRange(search_probability, 0.5, 0.99999, s, "search_probability");
+  core::requirePositive(max_search_half_extent_px, s, "max_search_half_extent_px");
+  core::requireInRange(fast_threshold, 1, 255, s, "fast_threshold");
+  core::requireInRange(grid_cols, 1, 100, s, "grid_cols");
+  core::requireInRange(grid_rows, 1, 100, s, "grid_rows");
+  core::requireNonNegative(min_corner_distance_px, s, "min_corner_distance_px");
+  core::requireInRange(border_px, 0, 1000, s, "border_px");
+  core::requireNonNegative(min_shi_tomasi, s, "min_shi_tomasi");
+  core::requireInRange(min_visible_features, 0, 10000, s, "min_visible_features");
+  core::requireInRange(max_new_features_per_frame, 0, 10000, s, "max_new_features_per_frame");
+  core::requireInRange(initial_features, 1, 10000, s, "initial_features");
+  core::requireInRange(max_map_features, 1, 100000, s, "max_map_features");
+  core::requireInRange(delete_min_predictions, 1, 1000000, s, "delete_min_predictions");
+  core::requireInRange(delete_min_match_ratio, 0, 1, s, "delete_min_match_ratio");
+  core::requirePositive(linearity_threshold, s, "linearity_threshold");
+  core::requireInRange(num_threads, 1, 64, s, "num_threads");
+}
+
+void TIMMBankOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+  IMMSLAM_LOAD_STRING(models);
+  IMMSLAM_LOAD_VECTOR(transition_matrix);
+  IMMSLAM_LOAD_DOUBLE(transition_stay);
+  IMMSLAM_LOAD_VECTOR(prior);
+  IMMSLAM_LOAD_DOUBLE(probability_floor);
+  const int r = static_cast<int>(parseModels().size());
+  transitionMatrix(r);  // validates
+  priorProbabilities(r);
+  core::requireInRange(probability_floor, 0, 0.99 / r, s, "probability_floor");
+}
+
+namespace
+{
+std::string joinNumbers(const std::vector<double>& v)
+{
+  std::ostringstream o;
+  o << "[";
+  for (std::size_t i = 0; i < v.size(); ++i) o << (i ? " " : "") << v[i];
+  o << "]";
+  return o.str();
+}
+}  // namespace
+
+void TIMMBankOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
+{
+  c.write(s, "models", models, mrpt::config::MRPT_SAVE_NAME_PADDING(), mrpt::config::MRPT_SAVE_VALUE_PADDING(),
+          "stationary | rotation:SIGMA_PX | general:SIGMA_PX[:SIGMA_ANG_PX] (acceleration noise in px)");
+  c.write(s, "transition_matrix", joinNumbers(transition_matrix), mrpt::config::MRPT_SAVE_NAME_PADDING(),
+          mrpt::config::MRPT_SAVE_VALUE_PADDING(), "r x r Markov matrix, row-major, rows sum to 1 ([] = from transition_stay)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(transition_stay, "diagonal of the default Markov matrix");
+  c.write(s, "prior", joinNumbers(prior), mrpt::config::MRPT_SAVE_NAME_PADDING(), mrpt::config::MRPT_SAVE_VALUE_PADDING(),
+          "initial model probabilities ([] = uniform)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(probability_floor, "lower bound of every model probability");
+}
+
+std::vector<motion::TMotionModel> TIMMBankOptions::parseModels() const
+{
+  std::vector<motion::TMotionModel> out;
+  std::istringstream is(models);
+  std::string spec;
+  while (is >> spec)
+  {
+    std::vector<std::string> parts;
+    std::string part;
+    std::istringstream ps(spec);
+    while (std::getline(ps, part, ':')) parts.push_back(part);
+    motion::TMotionModel m;
+    try
+    {
+      m.family = motion::familyFromName(parts.at(0));
+      std::vector<double> sig;
+      for (std::size_t i = 1; i < parts.size(); ++i)
+      {
+        std::size_t pos = 0;
+        sig.push_back(std::stod(parts[i], &pos));
+        if (pos != parts[i].size() || !(sig.back() > 0) || !std::isfinite(sig.back()))
+          throw std::invalid_argument("noise must be a number > 0");
+      }
+      if (m.family == motion::EMotionFamily::Stationary && !sig.empty())
+        throw std::invalid_argument("stationary takes no noise");
+      if (m.family == motion::EMotionFamily::Rotation && sig.size() != 1)
+        throw std::invalid_argument("rotation takes one noise value");
+      if (m.family == motion::EMotionFamily::General && (sig.empty() || sig.size() > 2))
+        throw std::invalid_argument("general takes one or two noise values");
+      if (m.family == motion::EMotionFamily::Rotation) m.sigmaAngularPx = sig[0];
+      if (m.family == motion::EMotionFamily::General)
+      {
+        m.sigmaLinearPx = sig[0];
+        m.sigmaAngularPx = sig.size() > 1 ? sig[1] : sig[0];
+      }
+    }
+    catch (const std::exception& e)
+    {
+      throw std::runtime_error("[imm] models: bad model '" + spec + "': " + e.what());
+    }
+    m.name = m.displayName();
+    // Identical models are allowed (e.g. to test that N identical models make one filter): number them.
+    int copies = 0;
+    for (const auto& o : out)
+      if (o.name.rfind(m.name, 0) == 0) ++copies;
+    if (copies) m.name += "_" + std::to_string(copies + 1);
+    out.push_back(m);
+  }
+  if (out.empty()) throw std::runtime_error("[imm] models: no model given");
+  return out;
+}
+
+MatX TIMMBankOptions::transitionMatrix(int r) const
+{
+  MatX pi(r, r);
+  if (transition_matrix.empty())
+  {
+    core::requireInRange(transition_stay, 0, 1, "imm", "transition_stay");
+    pi.setConstant(r > 1 ? (1.0 - transition_stay) / (r - 1) : 0.0);
+    pi.diagonal().setConstant(r > 1 ? transition_stay : 1.0);
+    return pi;
+  }
+  if (static_cast<int>(transition_matrix.size()) != r * r)
+  {
+    std::ostringstream s;
+    s << "[imm] transition_matrix: has " << transition_matrix.size() << " values, expected " << r * r << " (" << r
+      << " models)";
+    throw std::runtime_error(s.str());
+  }
+  for (int j = 0; j < r; ++j)
+  {
+    double sum = 0;
+    for (int i = 0; i < r; ++i)
+    {
+      pi(j, i) = transition_matrix[j * r + i];
+      if (!(pi(j, i) >= 0)) throw std::runtime_error("[imm] transition_matrix: negative entry in row " + std::to_string(j + 1));
+      sum += pi(j, i);
+    }
+    if (std::abs(sum - 1.0) > 1e-6)
+      throw std::runtime_error("[imm] transition_matrix: row " + std::to_string(j + 1) + " sums to " + std::to_string(sum) +
+                               ", not 1");
+    pi.row(j) /= sum;
+  }
+  return pi;
+}
+
+VecX TIMMBankOptions::priorProbabilities(int r) const
+{
+  if (prior.empty()) return VecX::Constant(r, 1.0 / r);
+  if (static_cast<int>(prior.size()) != r)
+    throw std::runtime_error("[imm] prior: has " + std::to_string(prior.size()) + " values, expected " + std::to_string(r));
+  VecX p = Eigen::Map<const VecX>(prior.data(), r);
+  if (!(p.array() >= 0).all() || std::abs(p.sum() - 1.0) > 1e-6)
+    throw std::runtime_error("[imm] prior: values must be >= 0 and sum to 1");
+  return p / p.sum();
+}
+}  // namespace immslam::slam

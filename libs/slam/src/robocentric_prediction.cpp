@@ -1,0 +1,100 @@
+/* imm-monoslam — camera-centred prediction: compose the whole state with the camera increment. */
+#include <immslam/features/inverse_depth.h>
+#include <immslam/math/quaternion.h>
+#include <immslam/slam/robocentric_prediction.h>
+
+namespace immslam::slam
+{
+namespace
+{
+constexpr int kU = motion::kV;  // velocities u = (v, w) at 7..12
+
+/** Transition Jacobian of one row block: D (own columns) and G (velocity columns). */
+struct TBlockJac
+{
+  int off = 0, len = 0;
+  MatX D, G;
+};
+}  // namespace
+
+void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& features,
+                        const motion::TMotionIncrement& inc, MatX& scratch)
+{
+  const Eigen::Index n = g.x.size();
+  if (inc.identity)
+  {
+    // Stationary: nothing moves; the velocities are zero with zero variance.
+    g.x.segment<6>(kU).setZero();
+    g.P.middleRows<6>(kU).setZero();
+    g.P.middleCols<6>(kU).setZero();
+    return;
+  }
+  const Vec3& t = inc.t;
+  const Vec4& dq = inc.dq;
+  std::vector<TBlockJac> blocks;
+  blocks.reserve(features.size() + 2);
+
+  // World pose T_C_W: r' = R(dq)^T (r - t), q' = conj(dq) (x) q.
+  {
+    TBlockJac b{0, 7, MatX::Zero(7, 7), MatX::Zero(7, 6)};
+    Mat3 J_p, J_t;
+    Mat34 J_dq;
+    const Vec3 r2 = features::transformPoint(g.x.segment<3>(0), dq, t, &J_p, &J_t, &J_dq);
+    Mat4 J_cq, J_q;
+    const Vec4 q2 = math::quatMultiply(math::quatConjugate(dq), g.x.segment<4>(3), &J_cq, &J_q);
+    b.D.topLeftCorner<3, 3>() = J_p;
+    b.D.bottomRightCorner<4, 4>() = J_q;
+    // Chain rule through the increment: d/du = d/dt dt/du + d/d(dq) d(dq)/du.
+    b.G.topRows<3>() = J_t * inc.J_t_u + J_dq * inc.J_dq_u;
+    b.G.bottomRows<4>() = J_cq * Vec4(1, -1, -1, -1).asDiagonal() * inc.J_dq_u;
+    g.x.segment<3>(0) = r2;
+    g.x.segment<4>(3) = q2;
+    blocks.push_back(std::move(b));
+  }
+  // Velocities.
+  blocks.push_back(TBlockJac{kU, 6, inc.J_uNext_u, MatX()});
+  // Features.
+  for (const auto& f : features)
+  {
+    TBlockJac b{f.offset, f.dim(), MatX(), MatX()};
+    if (f.kind == EFeatureKind::InverseDepth)
+    {
+      Mat6 J_y;
+      Eigen::Matrix<double, 6, 3> J_t;
+      Eigen::Matrix<double, 6, 4> J_dq;
+      g.x.segment<6>(f.offset) = features::transformInverseDepth(g.x.segment<6>(f.offset), dq, t, &J_y, &J_t, &J_dq);
+      b.D = J_y;
+      b.G = J_t * inc.J_t_u + J_dq * inc.J_dq_u;
+    }
+    else
+    {
+      Mat3 J_p, J_t;
+      Mat34 J_dq;
+      g.x.segment<3>(f.offset) = features::transformPoint(g.x.segment<3>(f.offset), dq, t, &J_p, &J_t, &J_dq);
+      b.D = J_p;
+      b.G = J_t * inc.J_t_u + J_dq * inc.J_dq_u;
+    }
+    blocks.push_back(std::move(b));
+  }
+  g.x.segment<6>(kU) = inc.uNext;
+
+  // The impulses act like a perturbation of u: P~ = P + E N E^T.
+  g.P.block<6, 6>(kU, kU) += inc.noiseCov;
+  // M = A P~ (row blocks), then P' = M A^T (column blocks).
+  scratch.resize(n, n);
+  for (const auto& b : blocks)
+  {
+    auto Mb = scratch.middleRows(b.off, b.len);
+    Mb.noalias() = b.D * g.P.middleRows(b.off, b.len);
+    if (b.G.size()) Mb.noalias() += b.G * g.P.middleRows<6>(kU);
+  }
+  for (const auto& b : blocks)
+  {
+    auto Pc = g.P.middleCols(b.off, b.len);
+    Pc.noalias() = scratch.middleCols(b.off, b.len) * b.D.transpose();
+    if (b.G.size()) Pc.noalias() += scratch.middleCols<6>(kU) * b.G.transpose();
+  }
+  // Exact symmetry (the two products round differently).
+  g.P.triangularView<Eigen::StrictlyUpper>() = g.P.transpose();
+}
+}  // namespace immslam::slam

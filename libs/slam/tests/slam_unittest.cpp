@@ -1,0 +1,316 @@
+/* Tests of the SLAM filter: measurement Jacobians through every camera model, structural state
+ * operations, 1-point RANSAC, and consistency (NEES) on a measurement-level Monte Carlo simulation. */
+#include <gtest/gtest.h>
+#include <immslam/features/inverse_depth.h>
+#include <immslam/math/chi2.h>
+#include <immslam/math/numerical_jacobian.h>
+#include <immslam/math/quaternion.h>
+#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/slam/measurement.h>
+#include <immslam/slam/robocentric_prediction.h>
+#include <immslam/slam/state_ops.h>
+
+#include <random>
+
+using namespace immslam;
+using namespace immslam::slam;
+
+namespace
+{
+std::vector<camera::CCameraModel::Ptr> allCameras()
+{
+  return {camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120}),
+          camera::makeCameraModel("opencv", 752, 480, {458.654, 457.296, 367.215, 248.375, -0.2834, 0.0740, 0.00019, 1.76e-05, 0}),
+          camera::makeCameraModel("davison", 320, 240, {195, 195, 162, 125, 9e-6})};
+}
+
+/** A state with a camera and one ID and one XYZ feature, all visible. */
+struct TToyState
+{
+  VecX x;
+  std::vector<TFeature> feats;
+  TToyState()
+  {
+    x = VecX::Zero(13 + 6 + 3);
+    x.segment<3>(0) = Vec3(0.05, -0.02, 0.1);
+    x.segment<4>(3) = math::quatFromRotationVector(Vec3(0.02, -0.05, 0.03));
+    x.segment<6>(13) << 0.01, 0.02, -0.01, 0.1, -0.05, 0.4;
+    x.segment<3>(19) << -0.3, 0.2, 2.5;
+    TFeature a, b;
+    a.offset = 13;
+    b.kind = EFeatureKind::XYZ;
+    b.offset = 19;
+    feats = {a, b};
+  }
+};
+}  // namespace
+
+TEST(Measurement, JacobiansThroughEveryCameraModel)
+{
+  TToyState s;
+  for (const auto& cam : allCameras())
+    for (const auto& f : s.feats)
+    {
+      Vec2 uv;
+      Mat2F Jf;
+      ASSERT_TRUE(predictMeasurement(*cam, s.x, f, uv, &Jf)) << cam->modelName();
+      const MatX Jn = math::numericalJacobian(
+          [&](const VecX& v) -> VecX {
+            Vec2 u;
+            predictMeasurement(*cam, v, f, u);
+            return u;
+          },
+          s.x, 1e-7);
+      EXPECT_LT((Jn.middleCols(f.offset, f.dim()) - Jf).norm(), 1e-4 * (1 + Jf.norm())) << cam->modelName();
+      // Camera-centred: the pixel depends on the feature block only.
+      EXPECT_LT(Jn.leftCols(13).norm(), 1e-9);
+    }
+}
+
+TEST(Measurement, WorldPoseInversionJacobian)
+{
+  TToyState s;
+  Vec3 r;
+  Vec4 q;
+  Eigen::Matrix<double, 7, 7> J;
+  worldPoseFromState(s.x, r, q, &J);
+  // T_W_C composed with T_C_W is the identity.
+  const Vec3 back = math::quatRotate(s.x.segment<4>(3), r) + s.x.segment<3>(0);
+  EXPECT_LT(back.norm(), 1e-12);
+  const MatX Jn = math::numericalJacobian(
+      [](const VecX& v) -> VecX {
+        VecX x = VecX::Zero(13);
+        x.head<7>() = v;
+        Vec3 rr;
+        Vec4 qq;
+        worldPoseFromState(x, rr, qq);
+        VecX o(7);
+        o << rr, qq;
+        return o;
+      },
+      VecX(s.x.head<7>()));
+  EXPECT_LT((Jn - J).norm(), 1e-7);
+}
+
+TEST(Prediction, CamCentredCovarianceMatchesNumericalTransition)
+{
+  // P' = A (P + E N E^T) A^T with A the Jacobian of the whole transition x' = f(x).
+  TToyState s;
+  s.x.segment<3>(7) << 0.01, -0.02, 0.015;
+  s.x.segment<3>(10) << 0.02, 0.01, -0.03;
+  std::mt19937 rng(9);
+  std::normal_distribution<double> g;
+  const int n = static_cast<int>(s.x.size());
+  MatX A(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) A(i, j) = 0.1 * g(rng);
+  const MatX P0 = A * A.transpose();
+  for (const auto* spec : {"general:1", "rotation:0.5", "stationary"})
+  {
+    TIMMBankOptions b;
+    b.models = spec;
+    const auto model = b.parseModels()[0];
+    const auto f = [&](const VecX& x) -> VecX {
+      bayes::TGaussian G{x, MatX::Zero(n, n)};
+      MatX scratch;
+      const auto inc = motion::motionIncrement(model, x.segment<3>(7), x.segment<3>(10), 1.0, 200);
+      predictRobocentric(G, s.feats, inc, scratch);
+      return G.x;
+    };
+    const MatX F = math::numericalJacobian(f, s.x, 1e-7);
+    const auto inc = motion::motionIncrement(model, s.x.segment<3>(7), s.x.segment<3>(10), 1.0, 200);
+    MatX Pt = P0;
+    Pt.block<6, 6>(7, 7) += inc.noiseCov;
+    bayes::TGaussian G{s.x, P0};
+    MatX scratch;
+    predictRobocentric(G, s.feats, inc, scratch);
+    EXPECT_LT((G.x - f(s.x)).norm(), 1e-15) << spec;
+    EXPECT_LT((G.P - F * Pt * F.transpose()).norm(), 1e-6 * P0.norm()) << spec;
+    EXPECT_LT((G.P - G.P.transpose()).norm(), 1e-15) << spec;
+  }
+}
+
+TEST(StateOps, FeatureInitialisationCovarianceMatchesJacobians)
+{
+  // Augmenting (x, P) must equal the first-order transfer through y = g(b(uv), rho), anchored at the
+  // (exactly known) current camera centre: no cross-covariance with the rest of the state.
+  const auto cam = allCameras()[2];
+  bayes::TGaussian G{VecX::Zero(13), MatX::Identity(13, 13) * 0.01};
+  const Vec2 uv(40, 200);
+  TNewRay ray;
+  ray.b_C = cam->unproject(uv, &ray.J_b_uv).unitVector();
+  ray.rho = 0.7;
+  ray.sigmaRho = 0.4;
+  ray.sigmaPixel = 1.5;
+  bayes::TGaussian out = G;
+  appendInverseDepthFeatures(out, {ray});
+  VecX in(3);
+  in << uv, ray.rho;
+  const auto fn = [&](const VecX& v) -> VecX {
+    return features::initInverseDepth(Vec3::Zero(), Vec4(1, 0, 0, 0), cam->unproject(v.head<2>()).unitVector(), v[2]);
+  };
+  const MatX J = math::numericalJacobian(fn, in, 1e-6);
+  const Eigen::Vector3d var(1.5 * 1.5, 1.5 * 1.5, 0.4 * 0.4);
+  EXPECT_LT((out.x.tail<6>() - fn(in)).norm(), 1e-12);
+  EXPECT_LT((out.P.bottomRightCorner(6, 6) - J * var.asDiagonal() * J.transpose()).norm(), 1e-6);
+  EXPECT_TRUE(out.P.bottomLeftCorner(6, 13).isZero());
+  EXPECT_EQ(out.P.topLeftCorner(13, 13), G.P);
+}
+
+TEST(StateOps, ConversionAndDeletionByReparametrization)
+{
+  std::mt19937 rng(4);
+  std::normal_distribution<double> g;
+  bayes::TGaussian G;
+  const int n = 13 + 6 + 6;
+  G.x = VecX::Zero(n);
+  G.x.segment<4>(3) << 1, 0, 0, 0;
+  G.x.segment<6>(13) << 0.1, 0, 0, 0.2, 0.1, 0.5;
+  G.x.segment<6>(19) << 0, 0.1, 0, -0.2, 0.1, 0.8;
+  MatX A(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) A(i, j) = g(rng);
+  G.P = A * A.transpose();
+  // Drop the first feature, convert the second.
+  features::Mat36 J;
+  TReparamSegment conv{19, 6, false, features::inverseDepthToPoint(G.x.segment<6>(19), &J), J};
+  bayes::TGaussian out = G;
+  reparametrize(out, {TReparamSegment{0, 13, true, {}, {}}, conv});
+  ASSERT_EQ(out.x.size(), 16);
+  MatX T = MatX::Zero(16, n);
+  T.topLeftCorner(13, 13).setIdentity();
+  T.block(13, 19, 3, 6) = J;
+  EXPECT_LT((out.P - T * G.P * T.transpose()).norm(), 1e-9);
+  EXPECT_EQ(out.P, out.P.transpose());
+  EXPECT_LT((out.x.tail<3>() - features::inverseDepthToPoint(G.x.segment<6>(19))).norm(), 1e-15);
+}
+
+TEST(StateOps, QuaternionNormalization)
+{
+  bayes::TGaussian G;
+  G.x = VecX::Zero(13);
+  G.x.segment<4>(3) << 1.1, 0.1, 0, 0;
+  G.P = MatX::Identity(13, 13) * 0.01;
+  normalizeQuaternion(G);
+  EXPECT_NEAR(G.x.segment<4>(3).norm(), 1.0, 1e-15);
+  // The covariance of q is now (nearly) singular along q itself.
+  const Vec4 q = G.x.segment<4>(3);
+  EXPECT_LT(q.dot(G.P.block<4, 4>(3, 3) * q), 1e-12);
+}
+
+namespace
+{
+/** One Monte Carlo run of the measurement-level simulation; returns the pose NEES per frame. */
+std::vector<double> simulateRun(unsigned seed, int nFrames, const std::string& models, double rhoStd,
+                                double* rmsPos = nullptr)
+{
+  const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  std::uniform_real_distribution<double> U(0, 1);
+  CMonoSlamIMM::TOptions o;
+  o.init_rho = 1.0;
+  o.init_rho_std = rhoStd;  // the truth below is drawn from these priors: a Bayesian-consistent set-up
+  o.init_linear_velocity_std_px = 1.0;
+  o.init_angular_velocity_std_px = 0.5;  // (slow rotation keeps the points in view for 100 frames)
+  o.num_threads = 1;
+  o.convert_to_xyz = true;
+  TIMMBankOptions b;
+  b.models = models;
+  CMonoSlamIMM slam(o, b, COnePointRansac::TOptions(), cam);
+
+  const double f = 200, sv = o.init_linear_velocity_std_px / f, sw = o.init_angular_velocity_std_px / f;
+  motion::Vec13 xv = motion::Vec13::Zero();
+  xv[3] = 1;
+  for (int i = 0; i < 3; ++i) xv[7 + i] = sv * g(rng), xv[10 + i] = sw * g(rng);
+  // True points: uniform over the first image, inverse depth from the filter's prior.
+  std::vector<Vec3> pts;
+  std::vector<Vec2> uv0;
+  for (int j = 0; j < 40; ++j)
+  {
+    const Vec2 uv(20 + 280 * U(rng), 20 + 200 * U(rng));
+    double rho;
+    do rho = o.init_rho + o.init_rho_std * g(rng);
+    while (rho < 0.2);
+    pts.push_back(cam->unproject(uv).unitVector() / rho);
+    uv0.push_back(uv + Vec2(g(rng), g(rng)));
+  }
+  slam.processMeasurements(0.0, {});
+  slam.addFeaturesAt(cv::Mat(), uv0);
+  motion::TMotionModel truth{motion::EMotionFamily::General, 0.1, 0.1, ""};
+  std::vector<double> nees;
+  double se = 0;
+  for (int k = 1; k <= nFrames; ++k)
+  {
+    for (int i = 0; i < 3; ++i)
+      xv[7 + i] += truth.sigmaLinearPx / f * g(rng), xv[10 + i] += truth.sigmaAngularPx / f * g(rng);
+    xv = motion::predictCamera(truth, xv, 1.0, f);
+    std::vector<std::pair<std::int64_t, Vec2>> z;
+    for (int j = 0; j < 40; ++j)
+    {
+      Vec2 uv;
+      const Vec3 pc = features::xyzInCamera(pts[j], xv.head<3>(), xv.segment<4>(3));
+      if (pc.z() > 0.05 && cam->project(pc, uv) && cam->isInImage(uv)) z.emplace_back(j, uv + Vec2(g(rng), g(rng)));
+    }
+    slam.processMeasurements(k / 30.0, z);
+    // Pose error [dp; dtheta] with dtheta = 2 vec(q_true^-1 (x) q_est) and its covariance.
+    const Vec4 qt = xv.segment<4>(3), qe = slam.cameraOrientation();
+    Mat4 Lq;
+    Vec4 dq = math::quatMultiply(math::quatConjugate(qt), qe, nullptr, &Lq);
+    double sgn = dq[0] < 0 ? -1 : 1;
+    Eigen::Matrix<double, 6, 1> e;
+    e << slam.cameraPosition() - xv.head<3>(), 2 * sgn * dq.tail<3>();
+    Eigen::Matrix<double, 6, 7> Jp = Eigen::Matrix<double, 6, 7>::Zero();
+    Jp.topLeftCorner<3, 3>().setIdentity();
+    Jp.bottomRightCorner<3, 4>() = 2 * sgn * Lq.bottomRows<3>();
+    const MatX Ppose = Jp * slam.cameraPoseCovariance() * Jp.transpose();
+    nees.push_back(e.dot(Ppose.ldlt().solve(e)));
+    se += e.head<3>().squaredNorm();
+  }
+  if (rmsPos) *rmsPos = std::sqrt(se / nFrames);
+  return nees;
+}
+}  // namespace
+
+namespace
+{
+/** Average (over runs) pose NEES per frame, and the fraction of frames inside the 95 % band. */
+double neesInsideFraction(const std::string& models, double rhoStd, double* meanNees)
+{
+  const int runs = 25, frames = 100, dof = 6;
+  std::vector<double> avg(frames, 0.0);
+  for (int r = 0; r < runs; ++r)
+  {
+    const auto n = simulateRun(100 + r, frames, models, rhoStd);
+    for (int k = 0; k < frames; ++k) avg[k] += n[k] / runs;
+  }
+  const double lo = math::chi2Quantile(0.025, runs * dof) / runs, hi = math::chi2Quantile(0.975, runs * dof) / runs;
+  int inside = 0;
+  for (double a : avg) inside += (a >= lo && a <= hi) ? 1 : 0;
+  *meanNees = std::accumulate(avg.begin(), avg.end(), 0.0) / frames;
+  std::printf("%s, sigma_rho %.2f: pose NEES band [%.2f, %.2f]; inside on %d %% of frames; mean NEES %.2f\n",
+              models.c_str(), rhoStd, lo, hi, inside, *meanNees);
+  return static_cast<double>(inside) / frames;
+}
+}  // namespace
+
+TEST(Consistency, CameraPoseNeesInsideChiSquareBand)
+{
+  // 25 Monte Carlo runs x 100 frames, 40 points, 1 px noise, truth drawn from the filter's priors and
+  // motion model. With a depth prior of 5 % the EKF is consistent; with wider depth priors it grows
+  // optimistic (the first-order linearization of the bilinear depth x displacement terms; reported,
+  // see doc/estimator.md) — that figure is printed, not asserted.
+  double mean = 0;
+  EXPECT_GE(neesInsideFraction("general:0.1", 0.05, &mean), 0.8);
+  EXPECT_GE(neesInsideFraction("stationary rotation:0.1 general:0.1", 0.05, &mean), 0.8);
+  neesInsideFraction("general:0.1", 0.3, &mean);
+}
+
+TEST(IMMSlam, IdenticalModelsGiveTheSingleFilter)
+{
+  double rms1 = 0, rms3 = 0;
+  const auto a = simulateRun(7, 30, "general:0.1", 0.3, &rms1);
+  const auto b = simulateRun(7, 30, "general:0.1 general:0.1 general:0.1", 0.3, &rms3);
+  for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k], b[k], 1e-5 * (1 + a[k]));
+  EXPECT_NEAR(rms1, rms3, 1e-8);
+}
