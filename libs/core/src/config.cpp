@@ -25,9 +25,16 @@ bool rawValue(const mrpt::config::CConfigFileBase& c, const std::string& section
 {
   if (!c.keyExists(section, key)) return false;
   out = trim(c.read_string(section, key, ""));
-  // Strip trailing "// comment" that MRPT keeps in some cases.
+  // Strip trailing comments that MRPT's parser keeps: "// ..." and " # ..." (a '#' after a blank).
   const auto cpos = out.find("//");
   if (cpos != std::string::npos) out = trim(out.substr(0, cpos));
+  for (std::size_t i = 1; i < out.size(); ++i)
+    if (out[i] == '#' && (out[i - 1] == ' ' || out[i - 1] == '\t'))
+    {
+      out = trim(out.substr(0, i));
+      break;
+    }
+  if (!out.empty() && out[0] == '#') out.clear();
   return true;
 }
 

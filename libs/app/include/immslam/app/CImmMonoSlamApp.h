@@ -1,0 +1,81 @@
+/* imm-monoslam — the main application as a class (MRPT's KFSLAMApp pattern): the thin main in
+ * apps/imm-monoslam calls initialize(argc, argv) and run(); tests run it end to end in-process and
+ * read its results. Command line, configs and outputs: ../shared/CONTRACT.md and doc/usage.md. */
+#pragma once
+
+#include <immslam/eval/ate.h>
+
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/system/COutputLogger.h>
+
+#include <atomic>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace immslam::app
+{
+/** Parsed command line. */
+struct TAppArguments
+{
+  std::string config;              ///< CONFIG.ini
+  std::string input;               ///< INPUT (rawlog or dataset folder), may be empty
+  std::string outDir = "imm-monoslam-out";
+  std::string calib;               ///< --calib FILE
+  std::string live;                ///< --live GRABBER.ini[:SECTION]
+  std::string record;              ///< --record FILE.rawlog (live sessions)
+  long long maxFrames = -1;        ///< --frames N
+  bool noGui = false;
+  bool quiet = false;
+  std::vector<std::string> sets;   ///< --set SECTION.KEY=VALUE
+};
+
+/** What a run did (printed as the summary; read by tests). */
+struct TRunSummary
+{
+  std::size_t framesRead = 0, framesProcessed = 0, framesSkipped = 0;
+  std::vector<std::string> skipReasons;  ///< first few reasons
+  std::string endReason;                 ///< "" for a normal end of input
+  double wallSeconds = 0, fps = 0, medianFrameMs = 0, meanFrameMs = 0;
+  int finalMapSize = 0;
+  double medianMatched = 0;
+  std::optional<eval::TAteResult> ate;   ///< against the input's ground truth, when it has one
+  std::string outDir;
+};
+
+class CImmMonoSlamApp : public mrpt::system::COutputLogger
+{
+ public:
+  CImmMonoSlamApp();
+  ~CImmMonoSlamApp() override;
+
+  /** Parses the command line and loads the config. \return -1 to go on with run(), or the exit
+   * status to return now (0 after --help/--version, 2 on bad usage, 1 on a bad config). */
+  int initialize(int argc, const char* const* argv);
+  int initialize(const std::vector<std::string>& args);
+
+  /** Runs on the input; writes every output file. \return 0 on success, 1 on bad input or failure
+   * (the message names the file, key or frame). Never throws. Outputs written so far are kept. */
+  int run();
+
+  /** Asks a running run() to stop after the current frame (thread- and signal-safe). */
+  void requestStop() { m_stop = true; }
+
+  /** The loaded configuration (after --set); tests may change keys before run(). */
+  mrpt::config::CConfigFileMemory& config() { return m_cfg; }
+  const TAppArguments& arguments() const { return m_args; }
+  const TRunSummary& summary() const { return m_summary; }
+
+  static std::string usage();
+  static std::string version();
+
+ private:
+  int runImpl();
+
+  TAppArguments m_args;
+  mrpt::config::CConfigFileMemory m_cfg;
+  std::string m_configDir;
+  TRunSummary m_summary;
+  std::atomic<bool> m_stop{false};
+};
+}  // namespace immslam::app

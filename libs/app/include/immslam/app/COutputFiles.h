@@ -1,0 +1,38 @@
+/* imm-monoslam — the output folder of a run (../shared/CONTRACT.md "Output folder"): files are
+ * created at the start and written frame by frame (flushed), so an interrupted or failed run keeps
+ * everything up to its last frame. */
+#pragma once
+
+#include <immslam/eval/TTrajectory.h>
+#include <immslam/io/CCsvWriter.h>
+#include <immslam/system/CMonoSlamSystem.h>
+
+#include <fstream>
+#include <memory>
+#include <string>
+
+namespace immslam::app
+{
+class COutputFiles
+{
+ public:
+  /** Creates the folder and the per-frame files (existing files are overwritten).
+   * \throws std::runtime_error naming the path that cannot be created. */
+  COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& slam);
+
+  /** Appends one processed frame to trajectory.txt, model_probabilities.csv and frame_stats.csv. */
+  void addFrame(const system::TSystemFrame& fr, const slam::CMonoSlamIMM& slam);
+
+  /** Writes map.csv (final map, world frame). */
+  void writeMap(const slam::CMonoSlamIMM& slam) const;
+
+  const eval::TTrajectory& trajectory() const { return m_traj; }
+  std::string path(const std::string& name) const;
+
+ private:
+  std::string m_dir;
+  std::ofstream m_trajFile;
+  std::unique_ptr<io::CCsvWriter> m_probs, m_stats;
+  eval::TTrajectory m_traj;
+};
+}  // namespace immslam::app

@@ -1,0 +1,38 @@
+/* imm-monoslam — options of the application itself: [input] and [output]. */
+#pragma once
+
+#include <mrpt/config/CLoadableOptions.h>
+
+#include <string>
+
+namespace immslam::app
+{
+/** Section [input]: where frames come from when no INPUT/--live is given. */
+struct TInputOptions : public mrpt::config::CLoadableOptions
+{
+  /** `synthetic` (the built-in renderer), or a .rawlog / dataset folder path (relative paths are
+   * resolved against the config file's folder, then the current folder). */
+  std::string source = "synthetic";
+  /** Scenario of the synthetic source (ini/scenarios/*.ini); empty: the built-in default scene. */
+  std::string scenario;
+  /** Frame rate assumed for live sources without timestamps (image_dir, ffmpeg). */
+  double live_frame_rate_hz = 30;
+
+  void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
+  void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
+};
+
+/** Section [output]: optional outputs beyond the per-frame files. */
+struct TOutputOptions : public mrpt::config::CLoadableOptions
+{
+  bool scene = true;        ///< write scene.3Dscene at the end
+  int scene_every_n = 0;    ///< also scene_NNNNNN.3Dscene every N frames (0: never)
+  bool overlays = false;    ///< write overlay images (search ellipses, matches, classes)
+  int overlay_every_n = 1;  ///< every N frames
+  bool overlay_video = false;  ///< also overlays.avi
+  bool plots = true;        ///< PNG plots at the end (model probabilities, search areas, ATE)
+
+  void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
+  void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
+};
+}  // namespace immslam::app

@@ -1,0 +1,66 @@
+/* imm-monoslam — per-frame output files of a run. */
+#include <immslam/app/COutputFiles.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <stdexcept>
+
+namespace immslam::app
+{
+namespace fs = std::filesystem;
+
+COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& slam) : m_dir(dir)
+{
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) throw std::runtime_error("cannot create output folder '" + dir + "': " + ec.message());
+  m_trajFile.open(path("trajectory.txt"));
+  if (!m_trajFile) throw std::runtime_error("cannot write '" + path("trajectory.txt") + "'");
+  std::vector<std::string> cols{"timestamp"};
+  for (const auto& m : slam.models()) cols.push_back(m.name);
+  m_probs = std::make_unique<io::CCsvWriter>(path("model_probabilities.csv"), cols);
+  m_stats = std::make_unique<io::CCsvWriter>(
+      path("frame_stats.csv"),
+      std::vector<std::string>{"timestamp", "n_map", "n_predicted", "n_matched", "n_rejected", "mean_search_area_px2",
+                               "n_depth_known", "time_ms", "frame", "dt_frames", "n_found", "n_low_innovation",
+                               "n_rescued", "n_hypotheses", "n_added", "n_deleted", "n_converted", "slam_ms",
+                               "predict_ms", "search_ms", "ransac_ms", "update_ms", "map_ms", "dominant_model"});
+}
+
+std::string COutputFiles::path(const std::string& name) const { return (fs::path(m_dir) / name).string(); }
+
+void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSlamIMM& slam)
+{
+  const auto& r = *fr.slam;
+  eval::TStampedPose pose{r.timestamp, slam.cameraPosition(), slam.cameraOrientation()};
+  m_traj.push_back(pose);
+  m_trajFile << eval::formatTumLine(pose) << '\n';
+  m_trajFile.flush();
+
+  const VecX mu = slam.modelProbabilities();
+  std::vector<io::CCsvCell> row{r.timestamp};
+  for (int i = 0; i < mu.size(); ++i) row.emplace_back(mu[i]);
+  m_probs->addCells(row);
+  m_probs->flush();
+
+  int best = 0;
+  mu.maxCoeff(&best);
+  m_stats->addCells({r.timestamp, r.nMap, r.nPredicted, r.nMatched, r.nRejected, r.meanSearchAreaPx2, r.nDepthKnown,
+                     fr.totalMs, r.frame, r.dtFrames, r.nFound, r.nLowInnovation, r.nRescued, r.nHypotheses, r.nAdded,
+                     r.nDeleted, r.nConverted, r.timeMs, r.tPredictMs, r.tSearchMs, r.tRansacMs, r.tUpdateMs, r.tMapMs,
+                     slam.models()[best].name});
+  m_stats->flush();
+}
+
+void COutputFiles::writeMap(const slam::CMonoSlamIMM& slam) const
+{
+  io::CCsvWriter map(path("map.csv"), {"feature_id", "x", "y", "z", "depth_known", "kind", "n_predicted", "n_matched"});
+  for (const auto& f : slam.features())
+  {
+    const Vec3 p = slam.featurePosition(f);
+    map.addCells({f.id, p.x(), p.y(), p.z(), slam.depthKnown(f) ? 1 : 0,
+                  f.kind == slam::EFeatureKind::XYZ ? "xyz" : "inverse_depth", f.nPredicted, f.nMatched});
+  }
+  map.flush();
+}
+}  // namespace immslam::app

@@ -1,0 +1,44 @@
+/* imm-monoslam — [input] and [output] options. */
+#include <immslam/app/app_options.h>
+#include <immslam/core/config.h>
+
+namespace immslam::app
+{
+void TInputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+  IMMSLAM_LOAD_STRING(source);
+  IMMSLAM_LOAD_STRING(scenario);
+  IMMSLAM_LOAD_DOUBLE(live_frame_rate_hz);
+  core::requirePositive(live_frame_rate_hz, s, "live_frame_rate_hz");
+  if (source.empty()) throw std::runtime_error("[" + s + "] source: empty (use 'synthetic' or a path)");
+}
+
+void TInputOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
+{
+  MRPT_SAVE_CONFIG_VAR_COMMENT(source, "synthetic | path of a .rawlog or dataset folder");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(scenario, "scenario of the synthetic source (empty: built-in default)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(live_frame_rate_hz, "frame rate of live sources without timestamps");
+}
+
+void TOutputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+  IMMSLAM_LOAD_BOOL(scene);
+  IMMSLAM_LOAD_INT(scene_every_n);
+  IMMSLAM_LOAD_BOOL(overlays);
+  IMMSLAM_LOAD_INT(overlay_every_n);
+  IMMSLAM_LOAD_BOOL(overlay_video);
+  IMMSLAM_LOAD_BOOL(plots);
+  core::requireNonNegative(scene_every_n, s, "scene_every_n");
+  core::requirePositive(overlay_every_n, s, "overlay_every_n");
+}
+
+void TOutputOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
+{
+  MRPT_SAVE_CONFIG_VAR_COMMENT(scene, "write scene.3Dscene (SceneViewer3D) at the end");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(scene_every_n, "also a scene every N frames (0: never)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(overlays, "write overlay images into overlays/");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(overlay_every_n, "overlay every N frames");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(overlay_video, "also overlays.avi (MJPG)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(plots, "PNG plots at the end");
+}
+}  // namespace immslam::app

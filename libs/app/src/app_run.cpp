@@ -1,0 +1,306 @@
+/* imm-monoslam — the run loop of the main application: input selection, calibration, the system
+ * per frame, outputs, progress and summary. */
+#include <immslam/app/CImmMonoSlamApp.h>
+#include <immslam/app/COutputFiles.h>
+#include <immslam/app/app_options.h>
+#include <immslam/camera/mrpt_camera.h>
+#include <immslam/core/config.h>
+#include <immslam/eval/statistics.h>
+#include <immslam/io/CImageSource.h>
+#include <immslam/sim/CSyntheticSource.h>
+#include <immslam/system/CMonoSlamSystem.h>
+
+#include <mrpt/config/CConfigFile.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+namespace immslam::app
+{
+namespace fs = std::filesystem;
+
+namespace
+{
+/** A path from the config: relative to the config's folder if it exists there, else as given. */
+std::string resolvePath(const std::string& p, const std::string& configDir)
+{
+  if (p.empty() || fs::path(p).is_absolute()) return p;
+  const fs::path rel = fs::path(configDir) / p;
+  if (!configDir.empty() && fs::exists(rel)) return rel.string();
+  return p;
+}
+
+/** Unknown sections and keys are errors that name them. */
+void checkConfigKeys(const mrpt::config::CConfigFileBase& cfg)
+{
+  auto known = system::CMonoSlamSystem::knownKeys();
+  known["input"] = core::knownKeys(TInputOptions(), "input");
+  known["output"] = core::knownKeys(TOutputOptions(), "output");
+  const auto camKeys = camera::cameraConfigKeys();
+  known["camera"] = std::set<std::string>(camKeys.begin(), camKeys.end());
+  std::vector<std::string> sections;
+  cfg.getAllSections(sections);
+  for (const auto& s : sections)
+  {
+    if (s.empty()) continue;
+    const auto it = known.find(s);
+    if (it == known.end())
+    {
+      std::string list;
+      for (const auto& [name, keys] : known) list += (list.empty() ? "" : ", ") + name;
+      throw std::runtime_error("unknown section [" + s + "] (known: " + list + ")");
+    }
+    core::checkKnownKeys(cfg, s, it->second);
+  }
+}
+
+std::string formatSeconds(double s)
+{
+  std::ostringstream o;
+  if (s >= 60)
+    o << static_cast<int>(s / 60) << "m" << std::setw(2) << std::setfill('0') << static_cast<int>(s) % 60 << "s";
+  else
+    o << std::fixed << std::setprecision(0) << s << "s";
+  return o.str();
+}
+}  // namespace
+
+int CImmMonoSlamApp::run()
+{
+  try
+  {
+    return runImpl();
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "imm-monoslam: error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+int CImmMonoSlamApp::runImpl()
+{
+  using Clock = std::chrono::steady_clock;
+  m_summary = TRunSummary();
+  m_summary.outDir = m_args.outDir;
+  try
+  {
+    checkConfigKeys(m_cfg);
+  }
+  catch (const std::exception& e)
+  {
+    throw std::runtime_error(m_args.config + ": " + e.what());
+  }
+  TInputOptions inOpts;
+  TOutputOptions outOpts;
+  try
+  {
+    inOpts.loadFromConfigFile(m_cfg, "input");
+    outOpts.loadFromConfigFile(m_cfg, "output");
+  }
+  catch (const std::exception& e)
+  {
+    throw std::runtime_error(m_args.config + ": " + e.what());
+  }
+
+  // ---- Input
+  io::CImageSource::Ptr source;
+  std::string inputPath = m_args.input;
+  if (!m_args.live.empty())
+    throw std::runtime_error("--live: live capture is not available in this build yet");
+  if (inputPath.empty() && inOpts.source != "synthetic") inputPath = resolvePath(inOpts.source, m_configDir);
+  if (!inputPath.empty())
+    source = io::openImageSource(inputPath);
+  else if (inOpts.scenario.empty())
+    source = std::make_unique<sim::CSyntheticSource>(sim::TScenario::builtinDefault());
+  else
+    source = std::make_unique<sim::CSyntheticSource>(resolvePath(inOpts.scenario, m_configDir));
+  logStr(mrpt::system::LVL_INFO, "input: " + source->describe());
+
+  // ---- Calibration: --calib > [camera] of the config > the input's own.
+  camera::CCameraModel::Ptr cam;
+  std::string calibOrigin;
+  if (!m_args.calib.empty())
+  {
+    cam = camera::loadCalibFile(m_args.calib);
+    calibOrigin = m_args.calib;
+  }
+  else if (m_cfg.sectionExists("camera"))
+  {
+    try
+    {
+      cam = camera::loadCameraFromConfig(m_cfg, "camera");
+    }
+    catch (const std::exception& e)
+    {
+      throw std::runtime_error(m_args.config + ": " + e.what());
+    }
+    calibOrigin = m_args.config + " [camera]";
+  }
+  else
+  {
+    cam = source->calibration();
+    calibOrigin = "the input";
+  }
+  if (!cam)
+    throw std::runtime_error("no camera calibration: the input has none; give --calib FILE (calib.txt format) or a "
+                             "[camera] section in " + m_args.config);
+  logStr(mrpt::system::LVL_INFO, "camera (" + calibOrigin + "): " + cam->toCalibLine());
+
+  // ---- System and outputs
+  std::unique_ptr<system::CMonoSlamSystem> sys;
+  try
+  {
+    sys = std::make_unique<system::CMonoSlamSystem>(m_cfg, cam);
+  }
+  catch (const std::exception& e)
+  {
+    throw std::runtime_error(m_args.config + ": " + e.what());
+  }
+  COutputFiles out(m_args.outDir, sys->slam());
+  {
+    // The effective configuration, printed and saved with every run.
+    mrpt::config::CConfigFileMemory eff;
+    inOpts.saveToConfigFile(eff, "input");
+    outOpts.saveToConfigFile(eff, "output");
+    sys->saveEffectiveConfig(eff);
+    std::ofstream f(out.path("config_effective.ini"));
+    f << "# Effective configuration of this run (" << version() << ")\n# config: " << m_args.config << "\n# camera: "
+      << cam->toCalibLine() << "\n"
+      << eff.getContent();
+    if (!m_args.quiet) logStr(mrpt::system::LVL_DEBUG, "effective configuration:\n" + eff.getContent());
+  }
+
+  // ---- Frames
+  const bool tty = !m_args.quiet && isatty(fileno(stderr));
+  const std::size_t total = source->sizeHint();
+  std::vector<double> frameMs, matched;
+  const auto tStart = Clock::now();
+  auto lastProgress = tStart;
+  io::TFrame frame;
+  std::string why;
+  for (;;)
+  {
+    if (m_stop)
+    {
+      m_summary.endReason = "stopped by user";
+      break;
+    }
+    if (m_args.maxFrames >= 0 && static_cast<long long>(m_summary.framesProcessed) >= m_args.maxFrames) break;
+    const io::ENextStatus st = source->next(frame, why);
+    if (st == io::ENextStatus::End)
+    {
+      m_summary.endReason = why;
+      break;
+    }
+    ++m_summary.framesRead;
+    auto skip = [&](const std::string& reason) {
+      ++m_summary.framesSkipped;
+      if (m_summary.skipReasons.size() < 20) m_summary.skipReasons.push_back(reason);
+      logStr(mrpt::system::LVL_WARN, "skipped: " + reason);
+    };
+    if (st == io::ENextStatus::Skipped)
+    {
+      skip(why);
+      continue;
+    }
+    if (frame.grey.cols != cam->width() || frame.grey.rows != cam->height())
+    {
+      // A uniformly resampled image of the calibrated camera is accepted with the scaled model.
+      const double sx = static_cast<double>(frame.grey.cols) / cam->width();
+      const double sy = static_cast<double>(frame.grey.rows) / cam->height();
+      if (m_summary.framesProcessed == 0 && std::abs(sx - sy) < 1e-9 && sx > 0)
+      {
+        logStr(mrpt::system::LVL_WARN, "images are " + std::to_string(frame.grey.cols) + "x" +
+                                           std::to_string(frame.grey.rows) + ": using the calibration scaled by " +
+                                           std::to_string(sx));
+        cam = cam->scaled(sx);
+        sys = std::make_unique<system::CMonoSlamSystem>(m_cfg, cam);
+      }
+      else
+      {
+        std::ostringstream s;
+        s << "frame " << frame.index << " (" << frame.origin << "): image " << frame.grey.cols << "x"
+          << frame.grey.rows << " does not match the calibration's " << cam->width() << "x" << cam->height();
+        skip(s.str());
+        continue;
+      }
+    }
+    const system::TSystemFrame* fr = nullptr;
+    try
+    {
+      fr = &sys->processFrame(frame.timestamp, frame.grey);
+    }
+    catch (const std::exception& e)
+    {
+      throw std::runtime_error("frame " + std::to_string(frame.index) + " (" + frame.origin + "): " + e.what());
+    }
+    out.addFrame(*fr, sys->slam());
+    ++m_summary.framesProcessed;
+    frameMs.push_back(fr->totalMs);
+    matched.push_back(fr->slam->nMatched);
+
+    if (tty && std::chrono::duration<double>(Clock::now() - lastProgress).count() > 0.2)
+    {
+      lastProgress = Clock::now();
+      const double el = std::chrono::duration<double>(lastProgress - tStart).count();
+      const double fps = m_summary.framesProcessed / std::max(el, 1e-9);
+      const VecX mu = sys->slam().modelProbabilities();
+      int best = 0;
+      mu.maxCoeff(&best);
+      std::fprintf(stderr, "\rframe %zu%s  %.1f fps  map %d  matched %d  %s %.2f", m_summary.framesRead,
+                   total ? ("/" + std::to_string(total)).c_str() : "", fps, fr->slam->nMap, fr->slam->nMatched,
+                   sys->slam().models()[best].name.c_str(), mu[best]);
+      if (total > m_summary.framesRead)
+        std::fprintf(stderr, "  ETA %s", formatSeconds((total - m_summary.framesRead) / std::max(fps, 1e-9)).c_str());
+      std::fprintf(stderr, "   ");
+    }
+  }
+  if (tty) std::fprintf(stderr, "\n");
+  m_summary.wallSeconds = std::chrono::duration<double>(Clock::now() - tStart).count();
+
+  // ---- Final outputs and summary
+  out.writeMap(sys->slam());
+  m_summary.finalMapSize = static_cast<int>(sys->slam().features().size());
+  if (!frameMs.empty())
+  {
+    m_summary.medianFrameMs = eval::median(frameMs);
+    m_summary.meanFrameMs = eval::mean(frameMs);
+    m_summary.medianMatched = eval::median(matched);
+    m_summary.fps = 1000.0 / std::max(m_summary.meanFrameMs, 1e-9);
+  }
+  if (const auto gt = source->groundTruth(); gt && out.trajectory().size() >= 3)
+  {
+    try
+    {
+      m_summary.ate = eval::computeAte(out.trajectory(), *gt, eval::EAlignment::Sim3, 0.01);
+    }
+    catch (const std::exception& e)
+    {
+      logStr(mrpt::system::LVL_WARN, std::string("no ATE: ") + e.what());
+    }
+  }
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(1) << "frames " << m_summary.framesProcessed << " processed";
+  if (m_summary.framesSkipped) s << ", " << m_summary.framesSkipped << " skipped";
+  s << "; " << m_summary.fps << " fps (median " << std::setprecision(2) << m_summary.medianFrameMs << " ms/frame)"
+    << "; map " << m_summary.finalMapSize << " features; median matched " << std::setprecision(0)
+    << m_summary.medianMatched;
+  if (m_summary.ate)
+    s << std::setprecision(4) << "; ATE (Sim3) " << m_summary.ate->rmse << " = " << std::setprecision(2)
+      << 100 * m_summary.ate->rmseOverPath << " % of path, " << 100 * m_summary.ate->rmseOverExtent
+      << " % of extent (" << m_summary.ate->nPairs << " poses)";
+  if (!m_summary.endReason.empty()) s << "; ended: " << m_summary.endReason;
+  s << "; outputs in " << m_args.outDir;
+  std::cout << s.str() << std::endl;
+  return 0;
+}
+}  // namespace immslam::app
