@@ -7,6 +7,8 @@
 #include <immslam/core/config.h>
 #include <immslam/eval/statistics.h>
 #include <immslam/io/CImageSource.h>
+#include <immslam/io/CLiveCameraSource.h>
+#include <immslam/io/CRawlogRecorder.h>
 #include <immslam/sim/CSyntheticSource.h>
 #include <immslam/system/CMonoSlamSystem.h>
 
@@ -111,21 +113,7 @@ int CImmMonoSlamApp::runImpl()
     throw std::runtime_error(m_args.config + ": " + e.what());
   }
 
-  // ---- Input
-  io::CImageSource::Ptr source;
-  std::string inputPath = m_args.input;
-  if (!m_args.live.empty())
-    throw std::runtime_error("--live: live capture is not available in this build yet");
-  if (inputPath.empty() && inOpts.source != "synthetic") inputPath = resolvePath(inOpts.source, m_configDir);
-  if (!inputPath.empty())
-    source = io::openImageSource(inputPath);
-  else if (inOpts.scenario.empty())
-    source = std::make_unique<sim::CSyntheticSource>(sim::TScenario::builtinDefault());
-  else
-    source = std::make_unique<sim::CSyntheticSource>(resolvePath(inOpts.scenario, m_configDir));
-  logStr(mrpt::system::LVL_INFO, "input: " + source->describe());
-
-  // ---- Calibration: --calib > [camera] of the config > the input's own.
+  // ---- Calibration given explicitly: --calib, then a [camera] section of the config.
   camera::CCameraModel::Ptr cam;
   std::string calibOrigin;
   if (!m_args.calib.empty())
@@ -145,7 +133,38 @@ int CImmMonoSlamApp::runImpl()
     }
     calibOrigin = m_args.config + " [camera]";
   }
+
+  // ---- Input: INPUT, --live, or the config's [input] source.
+  io::CImageSource::Ptr source;
+  std::shared_ptr<io::CRawlogRecorder> recorder;
+  std::string inputPath = m_args.input;
+  if (!m_args.live.empty())
+  {
+    const auto [ini, section] = io::splitLiveSpec(m_args.live);
+    io::TLiveOptions lo;
+    lo.frameRateHz = inOpts.live_frame_rate_hz;
+    lo.camera = cam;
+    auto live = std::make_unique<io::CLiveCameraSource>(ini, section, lo);
+    if (!m_args.record.empty())
+    {
+      recorder = std::make_shared<io::CRawlogRecorder>(m_args.record);
+      live->setRecorder(recorder);
+    }
+    source = std::move(live);
+  }
   else
+  {
+    if (!m_args.record.empty()) throw std::runtime_error("--record needs --live");
+    if (inputPath.empty() && inOpts.source != "synthetic") inputPath = resolvePath(inOpts.source, m_configDir);
+    if (!inputPath.empty())
+      source = io::openImageSource(inputPath);
+    else if (inOpts.scenario.empty())
+      source = std::make_unique<sim::CSyntheticSource>(sim::TScenario::builtinDefault());
+    else
+      source = std::make_unique<sim::CSyntheticSource>(resolvePath(inOpts.scenario, m_configDir));
+  }
+  logStr(mrpt::system::LVL_INFO, "input: " + source->describe());
+  if (!cam)
   {
     cam = source->calibration();
     calibOrigin = "the input";
@@ -265,6 +284,7 @@ int CImmMonoSlamApp::runImpl()
     }
   }
   if (tty) std::fprintf(stderr, "\n");
+  if (recorder) recorder->close();
   m_summary.wallSeconds = std::chrono::duration<double>(Clock::now() - tStart).count();
 
   // ---- Final outputs and summary

@@ -171,4 +171,16 @@ MatX CIMMEstimator::combinedBlock(const VecX& w, const VecX& xComb, int off, int
   }
   return B;
 }
+MatX CIMMEstimator::combinedColumns(const VecX& w, const VecX& xComb, int off, int len) const
+{
+  MatX C = MatX::Zero(xComb.size(), len);
+  for (int i = 0; i < numModels(); ++i)
+  {
+    if (!(w[i] > 0)) continue;
+    const VecX d = m_modes[i].x - xComb;
+    C += w[i] * m_modes[i].P.middleCols(off, len);
+    C.noalias() += (w[i] * d) * d.segment(off, len).transpose();
+  }
+  return C;
+}
 }  // namespace immslam::bayes

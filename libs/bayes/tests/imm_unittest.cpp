@@ -234,5 +234,6 @@ TEST(IMM, MixingKeepsCovariancesSymmetricPositiveDefinite)
   MatX Pf;
   imm.combine(imm.predictedProbabilities(), xf, &Pf, &pool);
   EXPECT_LT((imm.combinedBlock(imm.predictedProbabilities(), xf, 10, 6) - Pf.block(10, 10, 6, 6)).norm(), 1e-12);
+  EXPECT_LT((imm.combinedColumns(imm.predictedProbabilities(), xf, 10, 6) - Pf.middleCols(10, 6)).norm(), 1e-12);
   EXPECT_LT((Pf - Pf.transpose()).norm(), 1e-12);
 }

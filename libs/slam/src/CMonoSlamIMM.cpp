@@ -68,7 +68,12 @@ double CMonoSlamIMM::frameDt(double t)
     m_framePeriod = d[d.size() / 2];
   }
   if (!(delta > 0) || !(m_framePeriod > 0)) return 1.0;  // non-increasing timestamps: one frame
-  return std::clamp(delta / m_framePeriod, 0.05, 1000.0);
+  // Time is counted in frames (dimensionless formulation): timestamp jitter within 10 % of a whole
+  // number of periods is rounding (printed timestamps, clock ticks), not motion time.
+  const double dt = delta / m_framePeriod;
+  const double whole = std::round(dt);
+  if (whole >= 1 && std::abs(dt - whole) < 0.1 * whole) return whole;
+  return std::clamp(dt, 0.05, 1000.0);
 }
 
 void CMonoSlamIMM::predict(double dt)
@@ -81,16 +86,28 @@ void CMonoSlamIMM::predict(double dt)
                                              m_focal);
     predictRobocentric(g, m_features, inc, m_scratch[i]);
   });
-  // IMM-fused prediction (paper eqs. 10-11): the search regions of the whole bank.
+  // IMM-fused prediction (paper eqs. 10-11): the search regions of the whole bank. Only its mean is
+  // formed; the covariance blocks the search and RANSAC need come from predictedCov*().
   if (r == 1)
     m_xPred = m_imm->mode(0).x;
   else
-    m_imm->combine(m_imm->predictedProbabilities(), m_xPred, &m_PPred, m_pool.get());
+    m_imm->combine(m_imm->predictedProbabilities(), m_xPred, nullptr);
+}
+
+MatX CMonoSlamIMM::predictedCovBlock(int off, int len) const
+{
+  if (m_imm->numModels() == 1) return m_imm->mode(0).P.block(off, off, len, len);
+  return m_imm->combinedBlock(m_imm->predictedProbabilities(), m_xPred, off, len);
+}
+
+MatX CMonoSlamIMM::predictedCovColumns(int off, int len) const
+{
+  if (m_imm->numModels() == 1) return m_imm->mode(0).P.middleCols(off, len);
+  return m_imm->combinedColumns(m_imm->predictedProbabilities(), m_xPred, off, len);
 }
 
 void CMonoSlamIMM::searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& cands)
 {
-  const MatX& P = m_imm->numModels() == 1 ? m_imm->mode(0).P : m_PPred;
   Vec3 r_WC;
   Vec4 q_WC;
   worldPoseFromState(m_xPred, r_WC, q_WC);
@@ -119,7 +136,9 @@ void CMonoSlamIMM::searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& 
     if (!m_features[k].patch.valid()) continue;
     if (!predictMeasurement(*m_cam, m_xPred, m_features[k], j.h, &j.Jf)) continue;
     if (!m_cam->isInImage(j.h, margin)) continue;
-    j.S = innovationCovariance(P, m_features[k], j.Jf, m_opts.sigma_pixel);
+    // S_i = H_i P H_i^T + R with the fused P (eq. 14): only the feature's own block is needed.
+    const TFeature& f = m_features[k];
+    j.S = innovationCovariance(predictedCovBlock(f.offset, f.dim()), j.Jf, m_opts.sigma_pixel);
     jobs.push_back(j);
   }
   m_pool->parallelFor(0, static_cast<int>(jobs.size()), [&](int idx) {
@@ -218,7 +237,7 @@ std::vector<int> CMonoSlamIMM::rescue(const std::vector<TCandidate>& cands, cons
     for (int i = 0; i < r; ++i)
     {
       const auto& g = m_imm->mode(i);
-      S += w[i] * innovationCovariance(g.P, f, Jf, 0.0);
+      S += w[i] * innovationCovariance(g.P.block(f.offset, f.offset, f.dim(), f.dim()), Jf, 0.0);
       if (r > 1)
       {
         // Spread term H (x_i - x)(x_i - x)^T H^T of eq. (11) through the sparse H.

@@ -122,9 +122,9 @@ const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& 
     m_report.tSearchMs = msSince(t);
 
     t = Clock::now();
-    const MatX& Pp = m_imm->numModels() == 1 ? m_imm->mode(0).P : m_PPred;
-    const std::vector<int> low = m_ransac.lowInnovationInliers(*m_cam, m_xPred, Pp, m_features, cands, m_rng,
-                                                               &m_report.nHypotheses);
+    const std::vector<int> low = m_ransac.lowInnovationInliers(
+        *m_cam, m_xPred, [this](int off, int len) { return predictedCovColumns(off, len); }, m_features, cands, m_rng,
+        &m_report.nHypotheses);
     m_report.tRansacMs = msSince(t);
 
     t = Clock::now();

@@ -34,7 +34,8 @@ void COnePointRansac::TOptions::validate(const std::string& s) const
 
 COnePointRansac::COnePointRansac() = default;
 
-std::vector<int> COnePointRansac::lowInnovationInliers(const camera::CCameraModel& cam, const VecX& x, const MatX& P,
+std::vector<int> COnePointRansac::lowInnovationInliers(const camera::CCameraModel& cam, const VecX& x,
+                                                       const std::function<MatX(int, int)>& covColumns,
                                                        const std::vector<TFeature>& features,
                                                        const std::vector<TCandidate>& cands, std::mt19937& rng,
                                                        int* nHypotheses) const
@@ -55,7 +56,7 @@ std::vector<int> COnePointRansac::lowInnovationInliers(const camera::CCameraMode
     const TCandidate& c = cands[pick(rng)];
     const TFeature& f = features[c.feature];
     // Mean-only update with this single match: x_i = x + P H^T S^-1 (z - h).
-    const auto PHt = covarianceTimesHt(P, f, c.J_feat);
+    const MatX PHt = covColumns(f.offset, f.dim()) * c.J_feat.transpose();
     xh = x;
     xh.noalias() += PHt * c.S.ldlt().solve(c.z - c.h);
     support.clear();

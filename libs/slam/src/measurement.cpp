@@ -36,17 +36,9 @@ Vec3 featurePointInCamera(const VecX& x, const TFeature& f, double rhoMin)
   return features::inverseDepthToPoint(y);
 }
 
-Eigen::Matrix<double, Eigen::Dynamic, 2> covarianceTimesHt(const MatX& P, const TFeature& f, const Mat2F& J_feat)
+Mat2 innovationCovariance(const Eigen::Ref<const MatX>& Pff, const Mat2F& J_feat, double sigmaPixel)
 {
-  Eigen::Matrix<double, Eigen::Dynamic, 2> PHt(P.rows(), 2);
-  PHt.noalias() = P.middleCols(f.offset, f.dim()) * J_feat.transpose();
-  return PHt;
-}
-
-Mat2 innovationCovariance(const MatX& P, const TFeature& f, const Mat2F& J_feat, double sigmaPixel)
-{
-  const int d = f.dim();
-  Mat2 S = J_feat * P.block(f.offset, f.offset, d, d) * J_feat.transpose();
+  Mat2 S = J_feat * Pff * J_feat.transpose();
   S = 0.5 * (S + S.transpose()).eval();
   S.diagonal().array() += sigmaPixel * sigmaPixel;
   return S;

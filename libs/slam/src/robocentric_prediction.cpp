@@ -9,11 +9,14 @@ namespace
 {
 constexpr int kU = motion::kV;  // velocities u = (v, w) at 7..12
 
-/** Transition Jacobian of one row block: D (own columns) and G (velocity columns). */
+/** Transition Jacobian of one row block: D (own columns, s x s) and G (velocity columns, s x 6),
+ * stored in fixed-size buffers (s <= 7). */
 struct TBlockJac
 {
   int off = 0, len = 0;
-  MatX D, G;
+  bool hasG = true;
+  Eigen::Matrix<double, 7, 7> D;
+  Eigen::Matrix<double, 7, 6> G;
 };
 }  // namespace
 
@@ -31,12 +34,16 @@ void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& featur
   }
   const Vec3& t = inc.t;
   const Vec4& dq = inc.dq;
-  std::vector<TBlockJac> blocks;
+  thread_local std::vector<TBlockJac> blocks;
+  blocks.clear();
   blocks.reserve(features.size() + 2);
 
   // World pose T_C_W: r' = R(dq)^T (r - t), q' = conj(dq) (x) q.
   {
-    TBlockJac b{0, 7, MatX::Zero(7, 7), MatX::Zero(7, 6)};
+    TBlockJac b;
+    b.off = 0;
+    b.len = 7;
+    b.D.setZero();
     Mat3 J_p, J_t;
     Mat34 J_dq;
     const Vec3 r2 = features::transformPoint(g.x.segment<3>(0), dq, t, &J_p, &J_t, &J_dq);
@@ -49,52 +56,63 @@ void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& featur
     b.G.bottomRows<4>() = J_cq * Vec4(1, -1, -1, -1).asDiagonal() * inc.J_dq_u;
     g.x.segment<3>(0) = r2;
     g.x.segment<4>(3) = q2;
-    blocks.push_back(std::move(b));
+    blocks.push_back(b);
   }
   // Velocities.
-  blocks.push_back(TBlockJac{kU, 6, inc.J_uNext_u, MatX()});
+  {
+    TBlockJac b;
+    b.off = kU;
+    b.len = 6;
+    b.hasG = false;
+    b.D.topLeftCorner<6, 6>() = inc.J_uNext_u;
+    blocks.push_back(b);
+  }
   // Features.
   for (const auto& f : features)
   {
-    TBlockJac b{f.offset, f.dim(), MatX(), MatX()};
+    TBlockJac b;
+    b.off = f.offset;
+    b.len = f.dim();
     if (f.kind == EFeatureKind::InverseDepth)
     {
       Mat6 J_y;
       Eigen::Matrix<double, 6, 3> J_t;
       Eigen::Matrix<double, 6, 4> J_dq;
       g.x.segment<6>(f.offset) = features::transformInverseDepth(g.x.segment<6>(f.offset), dq, t, &J_y, &J_t, &J_dq);
-      b.D = J_y;
-      b.G = J_t * inc.J_t_u + J_dq * inc.J_dq_u;
+      b.D.topLeftCorner<6, 6>() = J_y;
+      b.G.topRows<6>() = J_t * inc.J_t_u + J_dq * inc.J_dq_u;
     }
     else
     {
       Mat3 J_p, J_t;
       Mat34 J_dq;
       g.x.segment<3>(f.offset) = features::transformPoint(g.x.segment<3>(f.offset), dq, t, &J_p, &J_t, &J_dq);
-      b.D = J_p;
-      b.G = J_t * inc.J_t_u + J_dq * inc.J_dq_u;
+      b.D.topLeftCorner<3, 3>() = J_p;
+      b.G.topRows<3>() = J_t * inc.J_t_u + J_dq * inc.J_dq_u;
     }
-    blocks.push_back(std::move(b));
+    blocks.push_back(b);
   }
   g.x.segment<6>(kU) = inc.uNext;
 
   // The impulses act like a perturbation of u: P~ = P + E N E^T.
   g.P.block<6, 6>(kU, kU) += inc.noiseCov;
-  // M = A P~ (row blocks), then P' = M A^T (column blocks).
+  // M = A P~ (row blocks), then P' = M A^T, lower triangle only (column blocks), then mirrored.
   scratch.resize(n, n);
+  const auto Pu = g.P.middleRows<6>(kU);
   for (const auto& b : blocks)
   {
     auto Mb = scratch.middleRows(b.off, b.len);
-    Mb.noalias() = b.D * g.P.middleRows(b.off, b.len);
-    if (b.G.size()) Mb.noalias() += b.G * g.P.middleRows<6>(kU);
+    Mb.noalias() = b.D.topLeftCorner(b.len, b.len) * g.P.middleRows(b.off, b.len);
+    if (b.hasG) Mb.noalias() += b.G.topRows(b.len) * Pu;
   }
   for (const auto& b : blocks)
   {
-    auto Pc = g.P.middleCols(b.off, b.len);
-    Pc.noalias() = scratch.middleCols(b.off, b.len) * b.D.transpose();
-    if (b.G.size()) Pc.noalias() += scratch.middleCols<6>(kU) * b.G.transpose();
+    // Rows from b.off down: P'[r, b] = M[r, b] D_b^T + M[r, u] G_b^T.
+    const Eigen::Index h = n - b.off;
+    auto Pc = g.P.block(b.off, b.off, h, b.len);
+    Pc.noalias() = scratch.block(b.off, b.off, h, b.len) * b.D.topLeftCorner(b.len, b.len).transpose();
+    if (b.hasG) Pc.noalias() += scratch.block(b.off, kU, h, 6) * b.G.topRows(b.len).transpose();
   }
-  // Exact symmetry (the two products round differently).
   g.P.triangularView<Eigen::StrictlyUpper>() = g.P.transpose();
 }
 }  // namespace immslam::slam

@@ -73,6 +73,8 @@ class CIMMEstimator
   void combine(const VecX& w, VecX& x, MatX* P, math::CThreadPool* pool = nullptr) const;
   /** Only the diagonal block [off, off+len) of the combined covariance (cheap: O(r len^2)). */
   MatX combinedBlock(const VecX& w, const VecX& xComb, int off, int len) const;
+  /** Only the columns [off, off+len) of the combined covariance (O(r n len)). */
+  MatX combinedColumns(const VecX& w, const VecX& xComb, int off, int len) const;
 
  private:
   MatX m_pi;

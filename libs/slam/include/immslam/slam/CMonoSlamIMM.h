@@ -218,6 +218,9 @@ class CMonoSlamIMM
   void beginFrame(double timestamp);
   void endFrame(std::chrono::steady_clock::time_point t0);
   void refreshFused();
+  /** Blocks and columns of the fused predicted covariance (eq. 11), never formed whole. */
+  MatX predictedCovBlock(int off, int len) const;
+  MatX predictedCovColumns(int off, int len) const;
   void updateWorldPose();
   double frameDt(double timestamp);
 
@@ -231,7 +234,6 @@ class CMonoSlamIMM
   VecX m_xFused;         ///< fused posterior mean
   VecX m_xPred;          ///< fused prediction (eq. 10) of the current frame
   VecX m_rescueWeights;  ///< mode weights after the first update (for the rescue test)
-  MatX m_PPred;          ///< fused predicted covariance (eq. 11) of the current frame
   std::vector<MatX> m_scratch;  ///< per-mode buffers of the prediction
   Vec3 m_rWC = Vec3::Zero();    ///< fused camera pose T_W_C
   Vec4 m_qWC = Vec4(1, 0, 0, 0);

@@ -14,6 +14,7 @@
 
 #include <mrpt/config/CLoadableOptions.h>
 
+#include <functional>
 #include <random>
 #include <vector>
 
@@ -51,7 +52,9 @@ class COnePointRansac
   /** Low-innovation inliers: the candidates (indices) supporting the best of the adaptive number of
    * 1-point hypotheses \f$ x_i = \hat x + K_i (z_i - h_i(\hat x)) \f$, \f$ K_i = \hat P H_i^\top S_i^{-1} \f$.
    * \param nHypotheses optional output: hypotheses tried. */
-  std::vector<int> lowInnovationInliers(const camera::CCameraModel& cam, const VecX& x, const MatX& P,
+  /** \param covColumns returns the columns [off, off+len) of the (fused) predicted covariance. */
+  std::vector<int> lowInnovationInliers(const camera::CCameraModel& cam, const VecX& x,
+                                        const std::function<MatX(int, int)>& covColumns,
                                         const std::vector<TFeature>& features,
                                         const std::vector<TCandidate>& cands, std::mt19937& rng,
                                         int* nHypotheses = nullptr) const;

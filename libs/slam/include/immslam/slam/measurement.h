@@ -23,11 +23,9 @@ bool predictMeasurement(const camera::CCameraModel& cam, const VecX& x, const TF
  * clamped to >= rhoMin, so a point at infinity becomes a far point along its ray). */
 Vec3 featurePointInCamera(const VecX& x, const TFeature& f, double rhoMin = 1e-3);
 
-/** \f$ S = H P H^\top + \sigma^2 I \f$ for one feature (H touches its block only). */
-Mat2 innovationCovariance(const MatX& P, const TFeature& f, const Mat2F& J_feat, double sigmaPixel);
-
-/** \f$ P H^\top \f$ (n x 2) for one feature: O(6 n). */
-Eigen::Matrix<double, Eigen::Dynamic, 2> covarianceTimesHt(const MatX& P, const TFeature& f, const Mat2F& J_feat);
+/** \f$ S = H P H^\top + \sigma^2 I \f$ for one feature: H touches its block only, so only the
+ * feature's own covariance block Pff is needed (exactly symmetric result). */
+Mat2 innovationCovariance(const Eigen::Ref<const MatX>& Pff, const Mat2F& J_feat, double sigmaPixel);
 
 /** T_W_C of the state's world-pose block (r_CW, q_CW = T_C_W):
  * \f$ q_{WC} = \bar q_{CW},\; r_{WC} = -R(q_{WC})\, r_{CW} \f$. \param J d(r_WC, q_WC)/d(r_CW, q_CW) (7x7). */
