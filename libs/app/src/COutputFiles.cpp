@@ -9,7 +9,7 @@ namespace immslam::app
 {
 namespace fs = std::filesystem;
 
-COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& slam) : m_dir(dir)
+COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& slam, bool searchLog) : m_dir(dir)
 {
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -25,6 +25,10 @@ COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& sla
                                "n_depth_known", "time_ms", "frame", "dt_frames", "n_found", "n_low_innovation",
                                "n_rescued", "n_hypotheses", "n_added", "n_deleted", "n_converted", "slam_ms",
                                "predict_ms", "search_ms", "ransac_ms", "update_ms", "map_ms", "dominant_model"});
+  if (searchLog)
+    m_searches = std::make_unique<io::CCsvWriter>(
+        path("searches.csv"), std::vector<std::string>{"timestamp", "feature_id", "h_u", "h_v", "s_uu", "s_uv", "s_vv",
+                                                       "found", "z_u", "z_v", "score", "status"});
 }
 
 std::string COutputFiles::path(const std::string& name) const { return (fs::path(m_dir) / name).string(); }
@@ -50,6 +54,14 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
                      r.nDeleted, r.nConverted, r.timeMs, r.tPredictMs, r.tSearchMs, r.tRansacMs, r.tUpdateMs, r.tMapMs,
                      slam.models()[best].name});
   m_stats->flush();
+  if (m_searches)
+  {
+    static const char* kStatus[] = {"not_found", "inlier", "rescued", "rejected"};
+    for (const auto& s : r.searches)
+      m_searches->addCells({r.timestamp, s.id, s.h.x(), s.h.y(), s.S(0, 0), s.S(0, 1), s.S(1, 1), s.found ? 1 : 0,
+                            s.z.x(), s.z.y(), s.score, kStatus[static_cast<int>(s.status)]});
+    m_searches->flush();
+  }
 }
 
 void COutputFiles::writeMap(const slam::CMonoSlamIMM& slam) const

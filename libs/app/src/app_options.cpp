@@ -28,6 +28,7 @@ void TOutputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, 
   IMMSLAM_LOAD_INT(overlay_every_n);
   IMMSLAM_LOAD_BOOL(overlay_video);
   IMMSLAM_LOAD_BOOL(plots);
+  IMMSLAM_LOAD_BOOL(search_log);
   core::requireNonNegative(scene_every_n, s, "scene_every_n");
   core::requirePositive(overlay_every_n, s, "overlay_every_n");
 }
@@ -40,5 +41,6 @@ void TOutputOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const st
   MRPT_SAVE_CONFIG_VAR_COMMENT(overlay_every_n, "overlay every N frames");
   MRPT_SAVE_CONFIG_VAR_COMMENT(overlay_video, "also overlays.avi (MJPG)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(plots, "PNG plots at the end");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(search_log, "write searches.csv (every active search of every frame)");
 }
 }  // namespace immslam::app

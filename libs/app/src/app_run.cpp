@@ -184,7 +184,7 @@ int CImmMonoSlamApp::runImpl()
   {
     throw std::runtime_error(m_args.config + ": " + e.what());
   }
-  COutputFiles out(m_args.outDir, sys->slam());
+  COutputFiles out(m_args.outDir, sys->slam(), outOpts.search_log);
   {
     // The effective configuration, printed and saved with every run.
     mrpt::config::CConfigFileMemory eff;

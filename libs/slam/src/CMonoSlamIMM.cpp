@@ -168,6 +168,7 @@ void CMonoSlamIMM::searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& 
     rec.S = j.S;
     rec.found = j.res.found;
     rec.z = j.res.uv;
+    rec.score = j.res.score;
     m_report.searches.push_back(rec);
     if (j.res.found) cands.push_back(TCandidate{j.k, j.res.uv, j.h, j.Jf, j.S});
   }

@@ -54,6 +54,7 @@ struct TSearchRecord
   Mat2 S = Mat2::Identity();  ///< IMM-fused innovation covariance (eq. 14)
   bool found = false;         ///< the active search found a match
   Vec2 z = Vec2::Zero();      ///< measured pixel (when found)
+  double score = -1;          ///< best ZNCC inside the ellipse (also when below the threshold)
   enum class EStatus
   {
     NotFound,
