@@ -2,6 +2,7 @@
  * per frame, outputs, progress and summary. */
 #include <immslam/app/CImmMonoSlamApp.h>
 #include <immslam/app/COutputFiles.h>
+#include <immslam/app/CVisualOutputs.h>
 #include <immslam/app/app_options.h>
 #include <immslam/camera/mrpt_camera.h>
 #include <immslam/core/config.h>
@@ -22,6 +23,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <map>
 #include <iostream>
 #include <sstream>
 
@@ -38,6 +40,23 @@ std::string resolvePath(const std::string& p, const std::string& configDir)
   const fs::path rel = fs::path(configDir) / p;
   if (!configDir.empty() && fs::exists(rel)) return rel.string();
   return p;
+}
+
+/** True motion labels of a rendered dataset folder (motion_labels.txt: "timestamp label"), if any. */
+std::map<long long, std::string> readMotionLabels(const std::string& folder)
+{
+  std::map<long long, std::string> out;
+  std::ifstream f(fs::path(folder) / "motion_labels.txt");
+  std::string line;
+  while (std::getline(f, line))
+  {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream is(line);
+    double t;
+    std::string label;
+    if (is >> t >> label) out[std::llround(t * 1e6)] = label;
+  }
+  return out;
 }
 
 /** Unknown sections and keys are errors that name them. */
@@ -185,6 +204,11 @@ int CImmMonoSlamApp::runImpl()
     throw std::runtime_error(m_args.config + ": " + e.what());
   }
   COutputFiles out(m_args.outDir, sys->slam(), outOpts.search_log);
+  CVisualOutputs visuals(m_args.outDir, outOpts, sys->slam());
+  // True motion labels per processed frame, when the input knows them (for the probability plot).
+  auto* synthetic = dynamic_cast<sim::CSyntheticSource*>(source.get());
+  const auto folderLabels = inputPath.empty() ? std::map<long long, std::string>() : readMotionLabels(inputPath);
+  std::vector<std::string> labels;
   {
     // The effective configuration, printed and saved with every run.
     mrpt::config::CConfigFileMemory eff;
@@ -263,6 +287,12 @@ int CImmMonoSlamApp::runImpl()
       throw std::runtime_error("frame " + std::to_string(frame.index) + " (" + frame.origin + "): " + e.what());
     }
     out.addFrame(*fr, sys->slam());
+    visuals.onFrame(m_summary.framesProcessed, frame.colour.empty() ? frame.grey : frame.colour, sys->slam(),
+                    out.trajectory());
+    if (synthetic)
+      labels.push_back(sim::toString(synthetic->label(frame.index)));
+    else if (const auto it = folderLabels.find(std::llround(frame.timestamp * 1e6)); it != folderLabels.end())
+      labels.push_back(it->second);
     ++m_summary.framesProcessed;
     frameMs.push_back(fr->totalMs);
     matched.push_back(fr->slam->nMatched);
@@ -308,6 +338,9 @@ int CImmMonoSlamApp::runImpl()
       logStr(mrpt::system::LVL_WARN, std::string("no ATE: ") + e.what());
     }
   }
+ std::vector<std::string> warnings;
+  visuals.finish(sys->slam(), out.trajectory(), source->groundTruth(), m_summary.ate, labels, warnings);
+  for (const auto& w : warnings) logStr(mrpt::system::LVL_WARN, w);
   std::ostringstream s;
   s << std::fixed << std::setprecision(1) << "frames " << m_summary.framesProcessed << " processed";
   if (m_summary.framesSkipped) s << ", " << m_summary.framesSkipped << " skipped";

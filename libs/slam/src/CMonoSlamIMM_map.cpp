@@ -406,4 +406,38 @@ Vec3 CMonoSlamIMM::featurePosition(const TFeature& f) const
 {
   return math::quatRotate(m_qWC, featurePointInCamera(m_xFused, f)) + m_rWC;
 }
+TFeatureWorldEstimate CMonoSlamIMM::featureWorldEstimate(const TFeature& f) const
+{
+  TFeatureWorldEstimate e;
+  const Mat3 R_WC = math::quatToRotation(m_qWC);
+  const MatX Pff = fusedCovarianceBlock(f.offset, f.dim());
+  e.depthKnown = depthKnown(f);
+  e.p_W = featurePosition(f);
+  if (f.kind == EFeatureKind::XYZ)
+  {
+    e.cov_W = R_WC * Pff * R_WC.transpose();
+    return e;
+  }
+  e.inverseDepth = true;
+  const Vec6 y = m_xFused.segment<6>(f.offset);
+  features::Mat36 J_p;
+  Vec6 yc = y;
+  yc[5] = std::max(yc[5], 1e-3);
+  features::inverseDepthToPoint(yc, &J_p);
+  e.cov_W = R_WC * J_p * Pff * J_p.transpose() * R_WC.transpose();
+  e.anchor_W = R_WC * y.head<3>() + m_rWC;
+  // Chain rule: (theta, phi)_W = angles(R_WC m(theta, phi)_C); rho unchanged.
+  Mat32 J_m;
+  const Vec3 mC = math::Bearing::DirectionFromAngles(y[3], y[4], &J_m);
+  Mat23 J_ang;
+  const Vec2 angW = math::Bearing::AzimuthElevation(R_WC * mC, &J_ang);
+  e.theta = angW[0];
+  e.phi = angW[1];
+  e.rho = y[5];
+  Mat3 T = Mat3::Zero();
+  T.topLeftCorner<2, 2>() = J_ang * R_WC * J_m;
+  T(2, 2) = 1;
+  e.cov_tpr = T * Pff.bottomRightCorner<3, 3>() * T.transpose();
+  return e;
+}
 }  // namespace immslam::slam

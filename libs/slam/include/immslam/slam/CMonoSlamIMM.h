@@ -64,6 +64,20 @@ struct TSearchRecord
   } status = EStatus::NotFound;
 };
 
+/** A feature's fused estimate expressed in the world frame (for maps, scenes and overlays). The
+ * covariances are those of the feature relative to the current camera (the camera pose's own
+ * uncertainty is not added). */
+struct TFeatureWorldEstimate
+{
+  Vec3 p_W = Vec3::Zero();      ///< mean position (inverse depth: anchor + m / max(rho, 1e-3))
+  Mat3 cov_W = Mat3::Zero();    ///< covariance of p_W (first order; for inverse depth its Euclidean approximation)
+  bool depthKnown = false;
+  bool inverseDepth = false;
+  Vec3 anchor_W = Vec3::Zero(); ///< inverse depth: anchor in W
+  double theta = 0, phi = 0, rho = 0;  ///< inverse depth: ray angles in W and inverse depth
+  Mat3 cov_tpr = Mat3::Zero();  ///< inverse depth: covariance of (theta, phi, rho) in W
+};
+
 /** Per-frame figures (frame_stats.csv). */
 struct TFrameReport
 {
@@ -206,6 +220,8 @@ class CMonoSlamIMM
   bool depthKnown(const TFeature& f) const;
   /** Euclidean position of a feature in W (fused mean; rho clamped for points near infinity). */
   Vec3 featurePosition(const TFeature& f) const;
+  /** The feature's fused estimate in W (position, covariances, inverse-depth view). */
+  TFeatureWorldEstimate featureWorldEstimate(const TFeature& f) const;
   /** Removes features by id from every mode (e.g. caught moving). */
   void removeFeatures(const std::vector<std::int64_t>& ids);
 

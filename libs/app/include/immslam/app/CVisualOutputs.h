@@ -1,0 +1,46 @@
+/* imm-monoslam — the visual outputs of a run: overlay images, MRPT scenes (.3Dscene) and their
+ * PNG snapshots, plots (model probabilities as the IMM paper's Fig. 4, search areas, ATE). */
+#pragma once
+
+#include <immslam/app/app_options.h>
+#include <immslam/eval/ate.h>
+#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/viz/COverlayWriter.h>
+#include <immslam/viz/scene.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace immslam::app
+{
+class CVisualOutputs
+{
+ public:
+  CVisualOutputs(const std::string& outDir, const TOutputOptions& opts, const slam::CMonoSlamIMM& slam);
+  ~CVisualOutputs();
+
+  /** Per processed frame: overlay (when enabled), periodic scene, and the series for the plots. */
+  void onFrame(std::size_t frameIndex, const cv::Mat& image, const slam::CMonoSlamIMM& slam,
+               const eval::TTrajectory& trajectory, const std::vector<std::string>& extraText = {});
+
+  /** At the end: scene.3Dscene (+ scene.png), plots. \param labels true motion label per processed
+   * frame (empty if unknown). Never throws for a figure that cannot be made (logs a warning). */
+  void finish(const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
+              const std::optional<eval::TTrajectory>& groundTruth, const std::optional<eval::TAteResult>& ate,
+              const std::vector<std::string>& labels, std::vector<std::string>& warnings);
+
+  /** Scene content of the current state (trajectory, camera, map with uncertainties). */
+  static viz::TSceneContent sceneContent(const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
+                                         const std::string& title);
+
+ private:
+  std::string m_dir;
+  TOutputOptions m_opts;
+  std::unique_ptr<viz::COverlayWriter> m_overlays;
+  std::vector<double> m_times, m_areas;
+  std::vector<VecX> m_probs;
+  std::vector<std::string> m_modelNames;
+};
+}  // namespace immslam::app
