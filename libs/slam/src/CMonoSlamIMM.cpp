@@ -141,6 +141,7 @@ void CMonoSlamIMM::searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& 
     j.S = innovationCovariance(predictedCovBlock(f.offset, f.dim()), j.Jf, m_opts.sigma_pixel);
     jobs.push_back(j);
   }
+  std::vector<cv::Mat> templates(jobs.size());
   m_pool->parallelFor(0, static_cast<int>(jobs.size()), [&](int idx) {
     TJob& j = jobs[idx];
     const TFeature& f = m_features[j.k];
@@ -152,8 +153,24 @@ void CMonoSlamIMM::searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& 
       if (n.norm() > 0) n.normalize();
       A = frontend::patchWarp(*m_cam, f.r0, f.q0, r_WC, q_WC, p, n);
     }
-    j.res = frontend::searchInEllipse(grey, f.patch.predictTemplate(A), j.h, j.S, sp);
+    templates[idx] = f.patch.predictTemplate(A);
+    j.res = frontend::searchInEllipse(grey, templates[idx], j.h, j.S, sp);
   });
+  // Expanded search: when the motion was not predicted (an acceleration beyond every model), most
+  // matches fall outside their ellipses together. The features not found are searched again in
+  // ellipses grown by expand_search_factor; 1-point RANSAC then decides with the filter's own S
+  // (a hypothesis from one such match must be supported by the others).
+  int nFound = 0;
+  for (const auto& j : jobs) nFound += j.res.found ? 1 : 0;
+  if (m_opts.expand_search_factor > 1 && !jobs.empty() && nFound < m_opts.expand_below_fraction * jobs.size())
+  {
+    m_report.expandedSearch = true;
+    const double k2 = m_opts.expand_search_factor * m_opts.expand_search_factor;
+    m_pool->parallelFor(0, static_cast<int>(jobs.size()), [&](int idx) {
+      TJob& j = jobs[idx];
+      if (!j.res.found) j.res = frontend::searchInEllipse(grey, templates[idx], j.h, j.S * k2, sp);
+    });
+  }
 
   double areaSum = 0;
   for (const auto& j : jobs)

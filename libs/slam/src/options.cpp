@@ -21,6 +21,8 @@ void CMonoSlamIMM::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileB
   IMMSLAM_LOAD_DOUBLE(min_ncc);
   IMMSLAM_LOAD_DOUBLE(search_probability);
   IMMSLAM_LOAD_DOUBLE(max_search_half_extent_px);
+  IMMSLAM_LOAD_DOUBLE(expand_search_factor);
+  IMMSLAM_LOAD_DOUBLE(expand_below_fraction);
   IMMSLAM_LOAD_INT(fast_threshold);
   IMMSLAM_LOAD_INT(grid_cols);
   IMMSLAM_LOAD_INT(grid_rows);
@@ -53,6 +55,8 @@ void CMonoSlamIMM::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, 
   MRPT_SAVE_CONFIG_VAR_COMMENT(min_ncc, "minimum zero-mean NCC of a match");
   MRPT_SAVE_CONFIG_VAR_COMMENT(search_probability, "probability of the search ellipse (2 dof)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(max_search_half_extent_px, "clip of very large search regions (px)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(expand_search_factor, "expanded search: ellipse axes times this (1 = off)...");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(expand_below_fraction, "...when fewer than this fraction of searches succeed");
   MRPT_SAVE_CONFIG_VAR_COMMENT(fast_threshold, "FAST corner threshold (grey levels)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(grid_cols, "new features go to empty cells of a grid_cols x grid_rows grid");
   MRPT_SAVE_CONFIG_VAR_COMMENT(grid_rows, "");
@@ -83,6 +87,8 @@ void CMonoSlamIMM::TOptions::validate(const std::string& s) const
   core::requireInRange(min_ncc, -1, 1, s, "min_ncc");
   core::requireInRange(search_probability, 0.5, 0.99999, s, "search_probability");
   core::requirePositive(max_search_half_extent_px, s, "max_search_half_extent_px");
+  core::requireInRange(expand_search_factor, 1, 10, s, "expand_search_factor");
+  core::requireInRange(expand_below_fraction, 0, 1, s, "expand_below_fraction");
   core::requireInRange(fast_threshold, 1, 255, s, "fast_threshold");
   core::requireInRange(grid_cols, 1, 100, s, "grid_cols");
   core::requireInRange(grid_rows, 1, 100, s, "grid_rows");

@@ -93,6 +93,7 @@ struct TFrameReport
   int nDepthKnown = 0;       ///< rho - 1.96 sigma_rho > 0, or XYZ
   int nAdded = 0, nDeleted = 0, nConverted = 0;
   double dtFrames = 1;       ///< elapsed time in nominal frame periods
+  bool expandedSearch = false;  ///< the expanded search ran (most matches outside their ellipses)
   double timeMs = 0;         ///< wall time of processFrame
   // Stage timings (ms)
   double tPredictMs = 0, tSearchMs = 0, tRansacMs = 0, tUpdateMs = 0, tMapMs = 0;
@@ -141,12 +142,14 @@ class CMonoSlamIMM
     double min_ncc = 0.8;                       ///< correlation threshold of a match
     double search_probability = 0.95;           ///< search ellipse probability (2 dof)
     double max_search_half_extent_px = 60;      ///< clip of pathological search regions
+    double expand_search_factor = 2.0;          ///< expanded search: ellipse axes x this factor (1: off)...
+    double expand_below_fraction = 0.5;         ///< ...when fewer than this fraction of searches found a match
     int fast_threshold = 20;
     int grid_cols = 8, grid_rows = 6;           ///< new features go to empty cells of this grid
     double min_corner_distance_px = 12;
     int border_px = 10;
     double min_shi_tomasi = 0.01;
-    int min_visible_features = 25;              ///< add features when fewer are predicted in view
+    int min_visible_features = 30;              ///< add features when fewer are predicted in view
     int max_new_features_per_frame = 10;
     int initial_features = 30;                  ///< features initialised at the first frame
     int max_map_features = 150;                 ///< bound of the map (oldest-unseen evicted beyond)

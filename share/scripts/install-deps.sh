@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages imm-monoslam needs (only those missing). Needs root for apt-get.
+set -euo pipefail
+PKGS=(
+  build-essential cmake pkg-config
+  libmrpt-dev mrpt-apps          # MRPT 2.5 (libraries, SceneViewer3D, RawLogViewer)
+  libopencv-dev libeigen3-dev zlib1g-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  libegl1 libegl-mesa0 libgl1-mesa-dri   # offscreen scene snapshots (EGL, no X needed)
+)
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all packages present"
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,134 @@
+/* End-to-end accuracy and behaviour of the application on rendered and real sequences. */
+#include "test_helpers.h"
+
+#include <immslam/eval/statistics.h>
+
+#include <cmath>
+#include <filesystem>
+
+using namespace immslam;
+using namespace immslam::test;
+
+TEST(SystemSynthetic, HandheldSingleModelAteWithinOnePercentOfPath)
+{
+  app::TRunSummary s;
+  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", "--out", outDir("handheld_single"), "--set",
+                    "input.scenario=scenarios/handheld.ini", "--set", "output.plots=false"},
+                   &s),
+            0);
+  ASSERT_TRUE(s.ate.has_value());
+  std::printf("handheld single: ATE %.4f = %.3f %% of path (%zu poses)\n", s.ate->rmse, 100 * s.ate->rmseOverPath,
+              s.ate->nPairs);
+  EXPECT_EQ(s.framesProcessed, s.ate->nPairs);
+  EXPECT_LE(s.ate->rmseOverPath, 0.01);
+}
+
+TEST(SystemRealData, VispRbtAteWithinThreePercentOfPath)
+{
+  if (!haveSharedData("visp_rbt")) GTEST_SKIP() << "../shared/data/visp_rbt is absent";
+  app::TRunSummary s;
+  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", sharedData("visp_rbt"), "--out", outDir("visp_single"), "--set",
+                    "output.plots=false"},
+                   &s),
+            0);
+  ASSERT_TRUE(s.ate.has_value());
+  std::printf("visp_rbt single: ATE %.4f = %.3f %% of path\n", s.ate->rmse, 100 * s.ate->rmseOverPath);
+  EXPECT_EQ(s.framesProcessed, 99u);
+  EXPECT_LE(s.ate->rmseOverPath, 0.03);
+}
+
+TEST(SystemRealData, MonoslamTestseqTrackedEndToEndWithoutKnownTarget)
+{
+  if (!haveSharedData("monoslam_testseq")) GTEST_SKIP() << "../shared/data/monoslam_testseq is absent";
+  app::TRunSummary s;
+  const auto out = outDir("testseq_single");
+  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", sharedData("monoslam_testseq"), "--out", out, "--set",
+                    "output.plots=false"},
+                   &s),
+            0);
+  EXPECT_EQ(s.framesProcessed, 1000u);
+  const auto rows = readCsv(out + "/frame_stats.csv");
+  ASSERT_EQ(rows.size(), 1001u);
+  // Never lost: measurements are used in every frame after the first.
+  int minMatched = 1 << 30;
+  for (std::size_t i = 2; i < rows.size(); ++i) minMatched = std::min(minMatched, std::stoi(rows[i][3]));
+  std::printf("testseq single: median matched %.0f, min matched %d, final map %d\n", s.medianMatched, minMatched,
+              s.finalMapSize);
+  EXPECT_GE(minMatched, 5);
+  EXPECT_GE(s.medianMatched, 20);
+}
+
+TEST(SystemOutputs, ContractFilesAndDeterminism)
+{
+  // Two runs of the same input and config: the estimates are byte-identical (timings aside).
+  const std::vector<std::string> base{sourceDir() + "/ini/imm7.ini", "--frames", "60", "--set",
+                                      "input.scenario=scenarios/paper.ini"};
+  const auto a = outDir("determinism_a"), b = outDir("determinism_b");
+  auto args = base;
+  args.insert(args.end(), {"--out", a});
+  ASSERT_EQ(runApp(args), 0);
+  args = base;
+  args.insert(args.end(), {"--out", b});
+  ASSERT_EQ(runApp(args), 0);
+  for (const auto* f : {"trajectory.txt", "model_probabilities.csv", "map.csv"})
+    EXPECT_EQ(readFile(a + "/" + f), readFile(b + "/" + f)) << f;
+
+  const auto probs = readCsv(a + "/model_probabilities.csv");
+  ASSERT_EQ(probs.size(), 61u);
+  EXPECT_EQ(probs[0][0], "timestamp");
+  EXPECT_EQ(probs[0].size(), 8u);
+  for (std::size_t i = 1; i < probs.size(); ++i)
+  {
+    double sum = 0;
+    for (std::size_t j = 1; j < probs[i].size(); ++j) sum += std::stod(probs[i][j]);
+    EXPECT_NEAR(sum, 1.0, 1e-6);
+    EXPECT_EQ(probs[i][0].substr(probs[i][0].find('.') + 1).size(), 6u);  // >= 6 decimals
+  }
+  const auto stats = readCsv(a + "/frame_stats.csv");
+  const std::vector<std::string> head{"timestamp", "n_map", "n_predicted", "n_matched", "n_rejected",
+                                      "mean_search_area_px2", "n_depth_known", "time_ms"};
+  ASSERT_GE(stats[0].size(), head.size());
+  for (std::size_t j = 0; j < head.size(); ++j) EXPECT_EQ(stats[0][j], head[j]);
+  const auto map = readCsv(a + "/map.csv");
+  EXPECT_EQ(map[0][0], "feature_id");
+  EXPECT_EQ(map[0][4], "depth_known");
+  EXPECT_TRUE(std::filesystem::exists(a + "/scene.3Dscene"));
+  EXPECT_TRUE(std::filesystem::exists(a + "/config_effective.ini"));
+  // trajectory.txt: one TUM line per processed frame.
+  const std::string traj = readFile(a + "/trajectory.txt");
+  EXPECT_EQ(std::count(traj.begin(), traj.end(), '\n'), 60);
+}
+
+TEST(SystemBadInput, MissingAndCorruptFramesAreSkippedAndCounted)
+{
+  if (!haveSharedData("visp_rbt")) GTEST_SKIP() << "../shared/data/visp_rbt is absent";
+  namespace fs = std::filesystem;
+  // A copy of 20 frames of visp_rbt with one missing and one corrupt image.
+  const fs::path d = fs::path(outDir("bad_frames_input"));
+  fs::create_directories(d / "rgb");
+  fs::copy_file(sharedData("visp_rbt") + "/calib.txt", d / "calib.txt");
+  std::ofstream rgb(d / "rgb.txt");
+  std::ifstream src(sharedData("visp_rbt") + "/rgb.txt");
+  std::string line;
+  int n = 0;
+  while (std::getline(src, line) && n < 20)
+  {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream is(line);
+    std::string t, p;
+    is >> t >> p;
+    rgb << line << "\n";
+    if (n == 7) std::ofstream(d / p) << "not a png";                      // corrupt
+    else if (n != 12) fs::copy_file(sharedData("visp_rbt") + "/" + p, d / p);  // 12: missing
+    ++n;
+  }
+  rgb.close();
+  app::TRunSummary s;
+  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", d.string(), "--out", outDir("bad_frames")}, &s), 0);
+  EXPECT_EQ(s.framesRead, 20u);
+  EXPECT_EQ(s.framesSkipped, 2u);
+  EXPECT_EQ(s.framesProcessed, 18u);
+  ASSERT_EQ(s.skipReasons.size(), 2u);
+  EXPECT_NE(s.skipReasons[0].find("color_image_0007"), std::string::npos) << s.skipReasons[0];
+  EXPECT_NE(s.skipReasons[1].find("color_image_0012"), std::string::npos) << s.skipReasons[1];
+}
