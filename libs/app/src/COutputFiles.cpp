@@ -25,7 +25,7 @@ COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& sla
                                "n_depth_known", "time_ms", "frame", "dt_frames", "n_found", "n_low_innovation",
                                "n_rescued", "n_hypotheses", "n_added", "n_deleted", "n_converted", "slam_ms",
                                "predict_ms", "search_ms", "ransac_ms", "update_ms", "map_ms", "dominant_model",
-                               "expanded_search"});
+                               "expanded_search", "sigma_pixel"});
   if (searchLog)
     m_searches = std::make_unique<io::CCsvWriter>(
         path("searches.csv"), std::vector<std::string>{"timestamp", "feature_id", "h_u", "h_v", "s_uu", "s_uv", "s_vv",
@@ -53,7 +53,7 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
   m_stats->addCells({r.timestamp, r.nMap, r.nPredicted, r.nMatched, r.nRejected, r.meanSearchAreaPx2, r.nDepthKnown,
                      fr.totalMs, r.frame, r.dtFrames, r.nFound, r.nLowInnovation, r.nRescued, r.nHypotheses, r.nAdded,
                      r.nDeleted, r.nConverted, r.timeMs, r.tPredictMs, r.tSearchMs, r.tRansacMs, r.tUpdateMs, r.tMapMs,
-                     slam.models()[best].name, r.expandedSearch ? 1 : 0});
+                     slam.models()[best].name, r.expandedSearch ? 1 : 0, r.sigmaPixel});
   m_stats->flush();
   if (m_searches)
   {

@@ -32,6 +32,7 @@ CMonoSlamIMM::CMonoSlamIMM(const TOptions& opts, const TIMMBankOptions& bank, co
   m_pool = std::make_unique<math::CThreadPool>(static_cast<unsigned>(m_opts.num_threads));
   m_scratch.resize(r);
   m_focal = 0.5 * (m_cam->fx() + m_cam->fy());
+  m_sigmaPixel = m_opts.sigma_pixel;
   initialiseState();
 }
 
@@ -138,7 +139,7 @@ void CMonoSlamIMM::searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& 
     if (!m_cam->isInImage(j.h, margin)) continue;
     // S_i = H_i P H_i^T + R with the fused P (eq. 14): only the feature's own block is needed.
     const TFeature& f = m_features[k];
-    j.S = innovationCovariance(predictedCovBlock(f.offset, f.dim()), j.Jf, m_opts.sigma_pixel);
+    j.S = innovationCovariance(predictedCovBlock(f.offset, f.dim()), j.Jf, m_sigmaPixel);
     jobs.push_back(j);
   }
   std::vector<cv::Mat> templates(jobs.size());
@@ -212,7 +213,7 @@ void CMonoSlamIMM::updateBank(const std::vector<TCandidate>& cands, const std::v
   }
   const int m = static_cast<int>(use.size());
   if (m == 0) return;
-  const VecX Rdiag = VecX::Constant(2 * m, m_opts.sigma_pixel * m_opts.sigma_pixel);
+  const VecX Rdiag = VecX::Constant(2 * m, m_sigmaPixel * m_sigmaPixel);
   m_pool->parallelFor(0, r, [&](int i) {
     auto& g = m_imm->mode(i);
     bayes::CSparseJacobian H(2 * m, static_cast<int>(g.x.size()));
@@ -263,11 +264,36 @@ std::vector<int> CMonoSlamIMM::rescue(const std::vector<TCandidate>& cands, cons
         S += w[i] * hd * hd.transpose();
       }
     }
-    S.diagonal().array() += m_opts.sigma_pixel * m_opts.sigma_pixel;
+    S.diagonal().array() += m_sigmaPixel * m_sigmaPixel;
     const Vec2 nu = cands[c].z - h;
     if (nu.dot(S.ldlt().solve(nu)) < gate) out.push_back(c);
   }
   return out;
+}
+
+void CMonoSlamIMM::estimateMeasurementNoise(const std::vector<TCandidate>& cands, const std::vector<int>& inliers)
+{
+  // Post-fit residuals e = z - h(x+) of the inliers satisfy E[e e^T] = R - H P+ H^T (Myers & Tapley):
+  // per pixel coordinate, sigma^2 ~ mean(|e|^2 + tr(H P+ H^T)) / 2. The frame's estimate is blended in
+  // with exponential forgetting and kept within bounds.
+  if (!m_opts.adaptive_pixel_noise || inliers.size() < 5) return;
+  double sum = 0;
+  int n = 0;
+  for (int c : inliers)
+  {
+    const TFeature& f = m_features[cands[c].feature];
+    Vec2 h;
+    Mat2F Jf;
+    if (!predictMeasurement(*m_cam, m_xFused, f, h, &Jf)) continue;
+    const Mat2 HPH = innovationCovariance(fusedCovarianceBlock(f.offset, f.dim()), Jf, 0.0);
+    sum += (cands[c].z - h).squaredNorm() + HPH.trace();
+    ++n;
+  }
+  if (n < 5) return;
+  const double var = sum / (2.0 * n);
+  const double a = m_opts.adaptive_noise_rate;
+  const double s2 = (1 - a) * m_sigmaPixel * m_sigmaPixel + a * var;
+  m_sigmaPixel = std::clamp(std::sqrt(s2), m_opts.min_sigma_pixel, m_opts.max_sigma_pixel);
 }
 
 void CMonoSlamIMM::updateWorldPose()

@@ -35,6 +35,7 @@ void CMonoSlamIMM::beginFrame(double timestamp)
   m_report = TFrameReport();
   m_report.timestamp = timestamp;
   m_report.frame = m_frame;
+  m_report.sigmaPixel = m_sigmaPixel;
 }
 
 void CMonoSlamIMM::endFrame(Clock::time_point t0)
@@ -167,6 +168,11 @@ const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& 
 
     t = Clock::now();
     refreshFused();
+    {
+      std::vector<int> inliers = low;
+      inliers.insert(inliers.end(), high.begin(), high.end());
+      estimateMeasurementNoise(cands, inliers);
+    }
     manageMap();
     m_report.tMapMs = msSince(t);
   }
@@ -341,7 +347,7 @@ std::vector<std::int64_t> CMonoSlamIMM::addFeaturesAt(const cv::Mat& grey, const
     ray.b_C = m_cam->unproject(uvs[i], &ray.J_b_uv).unitVector();
     ray.rho = i < rhoPrior.size() ? rhoPrior[i].first : m_opts.init_rho;
     ray.sigmaRho = i < rhoPrior.size() ? rhoPrior[i].second : m_opts.init_rho_std;
-    ray.sigmaPixel = m_opts.sigma_pixel;
+    ray.sigmaPixel = m_sigmaPixel;
     rays.push_back(ray);
     f.id = m_nextId++;
     f.kind = EFeatureKind::InverseDepth;

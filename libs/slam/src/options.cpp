@@ -11,6 +11,10 @@ namespace immslam::slam
 void CMonoSlamIMM::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
   IMMSLAM_LOAD_DOUBLE(sigma_pixel);
+  IMMSLAM_LOAD_BOOL(adaptive_pixel_noise);
+  IMMSLAM_LOAD_DOUBLE(adaptive_noise_rate);
+  IMMSLAM_LOAD_DOUBLE(min_sigma_pixel);
+  IMMSLAM_LOAD_DOUBLE(max_sigma_pixel);
   IMMSLAM_LOAD_DOUBLE(init_rho);
   IMMSLAM_LOAD_DOUBLE(init_rho_std);
   IMMSLAM_LOAD_DOUBLE(init_linear_velocity_std_px);
@@ -44,7 +48,11 @@ void CMonoSlamIMM::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileB
 
 void CMonoSlamIMM::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
 {
-  MRPT_SAVE_CONFIG_VAR_COMMENT(sigma_pixel, "image measurement noise std (px)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(sigma_pixel, "image measurement noise std (px); the initial value if adaptive");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(adaptive_pixel_noise, "estimate the measurement noise online from post-fit residuals");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(adaptive_noise_rate, "weight of each frame's noise estimate (exponential forgetting)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(min_sigma_pixel, "lower bound of the adaptive noise (px)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(max_sigma_pixel, "upper bound of the adaptive noise (px)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(init_rho, "inverse-depth prior mean (dimensionless: 1 = unit depth)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(init_rho_std, "inverse-depth prior std (its 95% region must include rho = 0)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(init_linear_velocity_std_px, "initial linear velocity std (px/frame at unit depth)");
@@ -78,6 +86,9 @@ void CMonoSlamIMM::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, 
 void CMonoSlamIMM::TOptions::validate(const std::string& s) const
 {
   core::requirePositive(sigma_pixel, s, "sigma_pixel");
+  core::requireInRange(adaptive_noise_rate, 0, 1, s, "adaptive_noise_rate");
+  core::requirePositive(min_sigma_pixel, s, "min_sigma_pixel");
+  core::requireInRange(max_sigma_pixel, min_sigma_pixel, 1e3, s, "max_sigma_pixel");
   core::requirePositive(init_rho_std, s, "init_rho_std");
   if (!std::isfinite(init_rho)) core::requirePositive(init_rho, s, "init_rho");
   core::requireNonNegative(init_linear_velocity_std_px, s, "init_linear_velocity_std_px");

@@ -214,6 +214,7 @@ std::vector<double> simulateRun(unsigned seed, int nFrames, const std::string& m
   o.init_linear_velocity_std_px = 1.0;
   o.init_angular_velocity_std_px = 0.5;  // (slow rotation keeps the points in view for 100 frames)
   o.num_threads = 1;
+  o.adaptive_pixel_noise = false;  // the simulated noise is known: 1 px
   o.convert_to_xyz = true;
   TIMMBankOptions b;
   b.models = models;

@@ -90,6 +90,7 @@ struct TFrameReport
   int nRejected = 0;         ///< found matches rejected as outliers
   int nLowInnovation = 0, nRescued = 0, nHypotheses = 0;
   double meanSearchAreaPx2 = 0;  ///< mean of pi * 5.991 * sqrt(det S_i) over searched features
+  double sigmaPixel = 0;         ///< measurement noise std used in this frame (px)
   int nDepthKnown = 0;       ///< rho - 1.96 sigma_rho > 0, or XYZ
   int nAdded = 0, nDeleted = 0, nConverted = 0;
   double dtFrames = 1;       ///< elapsed time in nominal frame periods
@@ -131,7 +132,11 @@ class CMonoSlamIMM
   /** Options of the SLAM filter (section [slam]). Noise in pixels: the dimensionless formulation. */
   struct TOptions : public mrpt::config::CLoadableOptions
   {
-    double sigma_pixel = 1.0;                   ///< image measurement noise (px)
+    double sigma_pixel = 1.0;                   ///< image measurement noise (px); initial value if adaptive
+    bool adaptive_pixel_noise = true;           ///< estimate the measurement noise online (see estimateMeasurementNoise)
+    double adaptive_noise_rate = 0.05;          ///< weight of each frame's estimate (exponential forgetting)
+    double min_sigma_pixel = 0.25;              ///< bounds of the adaptive estimate (px)
+    double max_sigma_pixel = 3.0;
     double init_rho = 1.0;                      ///< inverse-depth prior mean (dimensionless)
     double init_rho_std = 1.0;                  ///< inverse-depth prior std: 95 % region includes rho = 0
     double init_linear_velocity_std_px = 5.0;   ///< initial v std (image px/frame at unit depth)
@@ -238,6 +243,7 @@ class CMonoSlamIMM
   void beginFrame(double timestamp);
   void endFrame(std::chrono::steady_clock::time_point t0);
   void refreshFused();
+  void estimateMeasurementNoise(const std::vector<TCandidate>& cands, const std::vector<int>& inliers);
   /** Blocks and columns of the fused predicted covariance (eq. 11), never formed whole. */
   MatX predictedCovBlock(int off, int len) const;
   MatX predictedCovColumns(int off, int len) const;
@@ -263,5 +269,6 @@ class CMonoSlamIMM
   double m_lastTimestamp = 0, m_framePeriod = 0;
   std::vector<double> m_firstDeltas;
   double m_focal = 1;
+  double m_sigmaPixel = 1;  ///< current measurement noise std (px)
 };
 }  // namespace immslam::slam
