@@ -2,6 +2,7 @@
 #include <immslam/math/quaternion.h>
 #include <immslam/motion/motion_models.h>
 
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 
@@ -45,7 +46,15 @@ TMotionIncrement motionIncrement(const TMotionModel& m, const Vec3& v, const Vec
   TMotionIncrement inc;
   if (m.family == EMotionFamily::Stationary)
   {
+    // A camera at rest on a hand, a tripod or a drone is never perfectly still: an optional
+    // zero-mean angular jitter (random walk of the orientation, no velocity, no translation).
     inc.identity = true;
+    if (m.sigmaAngularPx > 0)
+    {
+      const double sw = m.sigmaAngularPx / focalPx * std::sqrt(dt);
+      inc.noiseCov.bottomRightCorner<3, 3>() = Mat3::Identity() * sw * sw;
+      inc.J_dq_n.block<3, 3>(1, 3) = 0.5 * Mat3::Identity();  // d exp(w)/dw at w = 0
+    }
     return inc;
   }
   Mat43 J_exp;
@@ -83,6 +92,15 @@ Vec13 predictCamera(const TMotionModel& m, const Vec13& xv, double dt, double fo
   {
     out.segment<6>(kV).setZero();
     if (F) F->block<6, 6>(kV, kV).setZero();
+    if (Q && m.sigmaAngularPx > 0)
+    {
+      // Jitter q' = q (x) exp(W): dq'/dW = L(q) * 0.5 [0; I].
+      Mat4 L;
+      math::quatMultiply(q, Vec4(1, 0, 0, 0), nullptr, &L);
+      const Mat43 G = 0.5 * L.rightCols<3>();
+      const double sw = m.sigmaAngularPx / focalPx * std::sqrt(dt);
+      Q->block<4, 4>(kQ, kQ) = sw * sw * G * G.transpose();
+    }
     return out;
   }
 

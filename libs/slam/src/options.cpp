@@ -144,7 +144,7 @@ std::string joinNumbers(const std::vector<double>& v)
 void TIMMBankOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
 {
   c.write(s, "models", models, mrpt::config::MRPT_SAVE_NAME_PADDING(), mrpt::config::MRPT_SAVE_VALUE_PADDING(),
-          "stationary | rotation:SIGMA_PX | general:SIGMA_PX[:SIGMA_ANG_PX] (acceleration noise in px)");
+          "stationary[:JITTER_PX] | rotation:SIGMA_PX | general:SIGMA_PX[:SIGMA_ANG_PX] (noise in px)");
   c.write(s, "transition_matrix", joinNumbers(transition_matrix), mrpt::config::MRPT_SAVE_NAME_PADDING(),
           mrpt::config::MRPT_SAVE_VALUE_PADDING(), "r x r Markov matrix, row-major, rows sum to 1 ([] = from transition_stay)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(transition_stay, "diagonal of the default Markov matrix");
@@ -176,8 +176,9 @@ std::vector<motion::TMotionModel> TIMMBankOptions::parseModels() const
         if (pos != parts[i].size() || !(sig.back() > 0) || !std::isfinite(sig.back()))
           throw std::invalid_argument("noise must be a number > 0");
       }
-      if (m.family == motion::EMotionFamily::Stationary && !sig.empty())
-        throw std::invalid_argument("stationary takes no noise");
+      if (m.family == motion::EMotionFamily::Stationary && sig.size() > 1)
+        throw std::invalid_argument("stationary takes at most one value (angular jitter)");
+      if (m.family == motion::EMotionFamily::Stationary) m.sigmaAngularPx = sig.empty() ? 0.0 : sig[0];
       if (m.family == motion::EMotionFamily::Rotation && sig.size() != 1)
         throw std::invalid_argument("rotation takes one noise value");
       if (m.family == motion::EMotionFamily::General && (sig.empty() || sig.size() > 2))

@@ -3,6 +3,8 @@
 #include <immslam/math/quaternion.h>
 #include <immslam/slam/robocentric_prediction.h>
 
+#include <Eigen/Cholesky>
+
 namespace immslam::slam
 {
 namespace
@@ -26,10 +28,46 @@ void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& featur
   const Eigen::Index n = g.x.size();
   if (inc.identity)
   {
-    // Stationary: nothing moves; the velocities are zero with zero variance.
+    // Stationary: nothing moves on average; the velocities are zero with zero variance.
     g.x.segment<6>(kU).setZero();
     g.P.middleRows<6>(kU).setZero();
     g.P.middleCols<6>(kU).setZero();
+    if (inc.noiseCov.isZero()) return;
+    // Zero-mean jitter n of the camera: P += B N B^T with B = df/dn at the identity increment
+    // (the world pose and every feature are re-expressed through the jitter rotation).
+    MatX B = MatX::Zero(n, 6);
+    const Vec3 t0 = Vec3::Zero();
+    const Vec4 dq0(1, 0, 0, 0);
+    {
+      Mat3 J_t;
+      Mat34 J_dq;
+      features::transformPoint(g.x.segment<3>(0), dq0, t0, nullptr, &J_t, &J_dq);
+      Mat4 J_cq;
+      math::quatMultiply(dq0, g.x.segment<4>(3), &J_cq, nullptr);
+      B.topRows<3>() = J_t * inc.J_t_n + J_dq * inc.J_dq_n;
+      B.middleRows<4>(3) = J_cq * Vec4(1, -1, -1, -1).asDiagonal() * inc.J_dq_n;
+    }
+    for (const auto& f : features)
+    {
+      if (f.kind == EFeatureKind::InverseDepth)
+      {
+        Eigen::Matrix<double, 6, 3> J_t;
+        Eigen::Matrix<double, 6, 4> J_dq;
+        features::transformInverseDepth(g.x.segment<6>(f.offset), dq0, t0, nullptr, &J_t, &J_dq);
+        B.middleRows<6>(f.offset) = J_t * inc.J_t_n + J_dq * inc.J_dq_n;
+      }
+      else
+      {
+        Mat3 J_t;
+        Mat34 J_dq;
+        features::transformPoint(g.x.segment<3>(f.offset), dq0, t0, nullptr, &J_t, &J_dq);
+        B.middleRows<3>(f.offset) = J_t * inc.J_t_n + J_dq * inc.J_dq_n;
+      }
+    }
+    const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(inc.noiseCov + 1e-30 * Eigen::Matrix<double, 6, 6>::Identity());
+    const MatX BL = B * llt.matrixL().toDenseMatrix();
+    g.P.selfadjointView<Eigen::Lower>().rankUpdate(BL, 1.0);
+    g.P.triangularView<Eigen::StrictlyUpper>() = g.P.transpose();
     return;
   }
   const Vec3& t = inc.t;

@@ -130,6 +130,37 @@ TEST(Prediction, CamCentredCovarianceMatchesNumericalTransition)
   }
 }
 
+TEST(Prediction, StationaryJitterCovariance)
+{
+  // Stationary with angular jitter: P' = P (velocities zeroed) + B N B^T, B = d f(x, n)/dn.
+  TToyState s;
+  const int n = static_cast<int>(s.x.size());
+  MatX P0 = MatX::Identity(n, n) * 0.01;
+  TIMMBankOptions b;
+  b.models = "stationary:0.3";
+  const auto model = b.parseModels()[0];
+  const auto inc = motion::motionIncrement(model, Vec3::Zero(), Vec3::Zero(), 1.0, 200);
+  ASSERT_TRUE(inc.identity);
+  const auto f = [&](const VecX& nse) -> VecX {
+    motion::TMotionIncrement rot;
+    rot.dq = math::quatFromRotationVector(nse.tail<3>());
+    bayes::TGaussian G{s.x, MatX::Zero(n, n)};
+    MatX scratch;
+    predictRobocentric(G, s.feats, rot, scratch);
+    return G.x;
+  };
+  const MatX B = math::numericalJacobian(f, VecX::Zero(6), 1e-7);
+  MatX Pexp = P0;
+  Pexp.middleRows(7, 6).setZero();
+  Pexp.middleCols(7, 6).setZero();
+  Pexp += B * inc.noiseCov * B.transpose();
+  bayes::TGaussian G{s.x, P0};
+  MatX scratch;
+  predictRobocentric(G, s.feats, inc, scratch);
+  EXPECT_LT((G.x.head(7) - s.x.head(7)).norm(), 1e-15);
+  EXPECT_LT((G.P - Pexp).norm(), 1e-9);
+}
+
 TEST(StateOps, FeatureInitialisationCovarianceMatchesJacobians)
 {
   // Augmenting (x, P) must equal the first-order transfer through y = g(b(uv), rho), anchored at the

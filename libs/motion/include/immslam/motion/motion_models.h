@@ -23,7 +23,7 @@ constexpr int kR = 0, kQ = 3, kV = 7, kW = 10, kCamDim = 13;
 /** The family of a motion model: what moves. */
 enum class EMotionFamily
 {
-  Stationary,  ///< r' = r, q' = q, v' = 0, w' = 0: nothing moves, no process noise
+  Stationary,  ///< r' = r, v' = 0, w' = 0; q' = q (x) exp(W dt), W a zero-mean angular jitter (0 by default)
   Rotation,    ///< r' = r, v' = 0; q' = q (x) q((w + W) dt), w' = w + W: camera centre fixed
   General      ///< r' = r + (v + V) dt, q' = q (x) q((w + W) dt), v' = v + V, w' = w + W
 };
@@ -41,7 +41,8 @@ struct TMotionModel
 {
   EMotionFamily family = EMotionFamily::General;
   double sigmaLinearPx = 1.0;   ///< linear acceleration noise (general only), pixels
-  double sigmaAngularPx = 1.0;  ///< angular acceleration noise (rotation, general), pixels
+  double sigmaAngularPx = 1.0;  ///< angular acceleration noise (rotation, general), pixels; for the
+                                ///< stationary model the std of a zero-mean angular jitter per frame
   std::string name;             ///< CSV column name, begins with the family name
 
   /** "general_1px", "rotation_0.5px", "stationary" when name is empty. */
@@ -69,7 +70,11 @@ struct TMotionIncrement
   Vec6u uNext = Vec6u::Zero();
   Mat6u J_uNext_u = Mat6u::Zero();
   Mat6u noiseCov = Mat6u::Zero();  ///< covariance of (V, W) in state units
-  bool identity = false;           ///< stationary: nothing moves
+  /** Stationary: nothing moves on average (the velocities do not act and become 0). A non-zero
+   * noiseCov is then a zero-mean jitter entering through J_t_n / J_dq_n instead of through u. */
+  bool identity = false;
+  Mat36u J_t_n = Mat36u::Zero();   ///< stationary jitter: dt/d(noise)
+  Mat46u J_dq_n = Mat46u::Zero();  ///< stationary jitter: d(dq)/d(noise)
 };
 
 /** The increment of model m over dt frames from the velocities (v, w) in the camera frame. */

@@ -106,11 +106,11 @@ struct TIMMBankOptions : public mrpt::config::CLoadableOptions
 {
   /** Space-separated model specs: `stationary`, `rotation:SIGMA_ANG_PX`,
    * `general:SIGMA_PX` or `general:SIGMA_LIN_PX:SIGMA_ANG_PX`. */
-  std::string models = "stationary rotation:0.1 rotation:0.5 rotation:1 general:0.1 general:0.5 general:1";
+  std::string models = "stationary:0.1 rotation:0.1 rotation:0.5 rotation:1 general:0.1 general:0.5 general:1";
   /** r x r row-major Markov matrix pi(j, i) = P(i at k | j at k-1); empty: built from transition_stay. */
   std::vector<double> transition_matrix;
   /** Diagonal of the default Markov matrix; the rest of each row is spread evenly. */
-  double transition_stay = 0.98;
+  double transition_stay = 0.995;
   /** Initial model probabilities (empty: uniform). */
   std::vector<double> prior;
   /** Lower bound of every model probability (no model dies for ever). */
