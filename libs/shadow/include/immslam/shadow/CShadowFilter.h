@@ -1,0 +1,180 @@
+/* imm-monoslam — the MonoSLAMBOT "Shadow Filter" (Migliore et al., ../shared/papers/
+ * monoslambot-shadow-filter.md, Fig. 1 and Sec. III): a bearing-only tracker that holds every NEW
+ * feature until it is classified static (then promoted into the SLAM filter) or dynamic (then kept
+ * and tracked, its trajectory output).
+ *
+ * Per frame the SLAM filter gives the camera pose and its motion since the previous frame
+ * (TCameraMotion); the shadow filter
+ *  1. predicts every feature's EKF with the camera increment (eq. 2, feature_ekf.h),
+ *  2. searches it in the image inside its own 95 % innovation ellipse with its patch warped to the
+ *     predicted appearance (frontend::searchInEllipse, frontend::patchWarp),
+ *  3. updates the EKF with the match (eqs. 3-5),
+ *  4. classifies the pending features (Sec. III-A, eqs. 6-14, CRayClassifier),
+ *  5. reports decisions, promotions (removed from the shadow filter), dynamic tracks in W, and drops
+ *     pending features that time out or are lost and dynamic ones lost for too long.
+ * New features are added by the caller after processFrame (addFeatures), at pixels of the frame just
+ * processed. Estimator library: no GUI, no file output. */
+#pragma once
+
+#include <immslam/camera/CCameraModel.h>
+#include <immslam/frontend/frontend.h>
+#include <immslam/shadow/CRayClassifier.h>
+#include <immslam/shadow/feature_ekf.h>
+#include <immslam/shadow/shadow_types.h>
+
+#include <mrpt/config/CLoadableOptions.h>
+#include <opencv2/core/mat.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <utility>
+#include <vector>
+
+namespace immslam::shadow
+{
+/** One feature held by the shadow filter. */
+struct TShadowFeature
+{
+  std::int64_t id = -1;
+  EShadowClass cls = EShadowClass::Pending;  ///< Pending or Dynamic
+  TShadowState ekf;                          ///< eqs. (1)-(5)
+  TRayTrack track;                           ///< views for the classifier (relative poses in C0)
+  frontend::CFeaturePatch patch;             ///< appearance at the first observation (may be invalid)
+  std::int64_t firstFrame = 0;
+  int missed = 0;                            ///< consecutive frames without a match
+  int nMeasured = 0;                         ///< frames with a match (the first observation included)
+  Vec2 predicted = Vec2::Zero();             ///< predicted pixel of this frame
+  Mat2 S = Mat2::Identity();                 ///< innovation covariance of this frame
+  Vec2 uv = Vec2::Zero();                    ///< last measured pixel
+  bool searched = false, measured = false;   ///< in this frame
+};
+
+/** The shadow filter (see the file comment; README.md in libs/shadow for the formulation and the
+ * measured figures). */
+class CShadowFilter
+{
+ public:
+  /** Options (section [shadow]). Noise in pixels: the dimensionless formulation (doc/conventions.md):
+   * an acceleration of s px means s / f length units per frame^2 (the image motion a point at unit
+   * depth would show). */
+  struct TOptions : public mrpt::config::CLoadableOptions
+  {
+    // -- EKF (Sec. III)
+    double sigma_pixel = 1.0;            ///< measurement noise std (px)
+    double init_rho = 1.0;               ///< prior mean of w = inverse distance (1 = unit distance)
+    double init_rho_std = 1.0;           ///< prior std of w (its 95 % region includes 0 = infinity)
+    double init_velocity_std_px = 5.0;   ///< velocity prior std (px/frame at unit depth)
+    double sigma_accel_px = 0.5;         ///< acceleration noise (px/frame^2 at unit depth)
+    int ekf_iterations = 1;              ///< 1: EKF; > 1: iterated EKF update
+    // -- Active search (frontend)
+    int patch_half_size = 5;             ///< 11x11 templates
+    bool warp_patches = true;            ///< predict the patch appearance (affine warp)
+    double min_ncc = 0.8;                ///< correlation threshold of a match
+    double search_probability = 0.95;    ///< probability of the search ellipse (2 dof)
+    double max_search_half_extent_px = 60;
+    // -- Classifier (Sec. III-A)
+    double alpha = 0.05;                 ///< significance of the three-ray test (eq. 14)
+    int min_test_frames = 3;             ///< first test once the feature's views span this many frames
+    int dynamic_rejections = 5;          ///< dynamic when this many of ...
+    int dynamic_window = 5;              ///< ... the last this-many tests reject
+    int static_acceptances = 5;          ///< static: consecutive acceptances ...
+    int static_min_frames = 10;          ///< ... a track at least this long ...
+    double static_min_velocity_px = 1.0; ///< ... and power against this speed (px/frame at the point's distance)
+    double static_power = 0.95;          ///< ... with this detection probability
+    bool static_power_worst_case = true; ///< ... in every direction (else on average over directions)
+    double increment_cov_scale = 1.0;    ///< inflation of the SLAM increments' covariance
+    // -- Management
+    int max_pending_frames = 150;        ///< undecided features are dropped after this many frames
+    int max_missed_frames = 5;           ///< pending features dropped after this many misses in a row
+    int dynamic_max_missed_frames = 10;  ///< dynamic features dropped after this many misses in a row
+    int max_features = 100;              ///< addFeatures refuses beyond this many held features
+    double id_offset = 1e9;              ///< first id of the built-in id counter (no allocator given)
+    double min_inverse_distance = 1e-3;  ///< w clamp when placing tracks in W
+
+    void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
+    void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
+    /** \throws std::runtime_error naming [section] key of a value out of range. */
+    void validate(const std::string& section) const;
+    /** The classifier's parameters. */
+    TRayClassifierParams classifierParams() const;
+  };
+
+  /** Returns a new feature id, unique across SLAM and shadow features. */
+  using IdAllocator = std::function<std::int64_t()>;
+
+  /** \param ids optional id allocator (e.g. the SLAM's); without it ids count from
+   * options.id_offset. \throws std::runtime_error on a null camera or invalid options. */
+  CShadowFilter(const TOptions& opts, camera::CCameraModel::Ptr cam, IdAllocator ids = {});
+
+  /** One frame with images: prediction (eq. 2), active search of every feature in its innovation
+   * ellipse, update (eqs. 3-5), classification (Sec. III-A), drops. \param grey CV_8UC1, the
+   * camera's size. The report stays valid until the next call. */
+  const TShadowReport& processFrame(const TCameraMotion& motion, const cv::Mat& grey);
+
+  /** The same step with known data association and no image (measurement-level simulations,
+   * callers with their own front end): z holds (feature id, measured pixel); features absent from
+   * z count as missed; unknown ids are ignored. */
+  const TShadowReport& processMeasurements(const TCameraMotion& motion,
+                                           const std::vector<std::pair<std::int64_t, Vec2>>& z);
+
+  /** New features observed at pixels uv of the frame just processed (call after processFrame /
+   * processMeasurements of that frame; before the first frame the camera is taken as W's origin).
+   * With a non-empty grey their patches are extracted there (-1 returned where it does not fit);
+   * an empty grey stores no patch (processMeasurements only). Returns the ids (-1: refused, e.g.
+   * max_features reached or not unprojectable). */
+  std::vector<std::int64_t> addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv);
+
+  /** Measured or predicted pixels of all held features (to keep new detections away). */
+  std::vector<Vec2> occupiedPixels() const;
+
+  /** Features waiting for a classification. */
+  std::size_t numPending() const;
+  /** Features classified dynamic and still tracked. */
+  std::size_t numDynamic() const;
+  /** All held features (pending + dynamic). */
+  std::size_t size() const { return m_features.size(); }
+  /** The held features (read-only, for overlays and tests). */
+  const std::vector<TShadowFeature>& features() const { return m_features; }
+  /** The feature with this id, or nullptr. */
+  const TShadowFeature* feature(std::int64_t id) const;
+  /** Removes features by id (e.g. matched by the caller to something else). */
+  void removeFeatures(const std::vector<std::int64_t>& ids);
+
+  /** The report of the last processed frame. */
+  const TShadowReport& lastReport() const { return m_report; }
+  /** The options in use (validated). */
+  const TOptions& options() const { return m_opts; }
+  /** The static/dynamic classifier (Sec. III-A). */
+  const CRayClassifier& classifier() const { return m_classifier; }
+  /** The camera model. */
+  const camera::CCameraModel& camera() const { return *m_cam; }
+
+  /** A dynamic feature's world position, covariance and velocity from the current pose. */
+  TTrackPoint trackPoint(const TShadowFeature& f) const;
+
+ private:
+  void beginFrame(const TCameraMotion& motion);
+  void predictAll(const TCameraMotion& motion);
+  void searchAll(const cv::Mat& grey);
+  void updateFeature(TShadowFeature& f, const Vec2& z);
+  void classifyAndManage();
+  void endFrame();
+  TPromotion makePromotion(const TShadowFeature& f, const TRayTestResult& r) const;
+
+  TOptions m_opts;
+  camera::CCameraModel::Ptr m_cam;
+  CRayClassifier m_classifier;
+  IdAllocator m_ids;
+  std::int64_t m_nextId = 0;
+  std::vector<TShadowFeature> m_features;
+  TCameraMotion m_motion;  ///< the current frame's motion
+  bool m_started = false;
+  TShadowReport m_report;
+  frontend::TSearchParams m_search;
+  frontend::TSearchWorkspace m_ws;
+  cv::Mat m_templ;
+  double m_sigmaV = 0, m_sigmaA = 0;  ///< in length units per frame (per frame^2)
+  std::chrono::steady_clock::time_point m_t0;  ///< start of the current frame
+};
+}  // namespace immslam::shadow

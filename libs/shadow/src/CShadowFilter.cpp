@@ -1,0 +1,356 @@
+/* imm-monoslam — the MonoSLAMBOT shadow filter: wiring of the per-feature EKF, the active search and
+ * the static/dynamic classifier. */
+#include <immslam/math/chi2.h>
+#include <immslam/math/quaternion.h>
+#include <immslam/shadow/CShadowFilter.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+namespace immslam::shadow
+{
+namespace
+{
+double msSince(std::chrono::steady_clock::time_point t0)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+const CShadowFilter::TOptions& checked(const CShadowFilter::TOptions& o)
+{
+  o.validate("shadow");
+  return o;
+}
+}  // namespace
+
+CShadowFilter::CShadowFilter(const TOptions& opts, camera::CCameraModel::Ptr cam, IdAllocator ids)
+    : m_opts(checked(opts)),
+      m_cam(cam ? cam : throw std::runtime_error("shadow::CShadowFilter: null camera model")),
+      m_classifier(m_opts.classifierParams(), m_cam),
+      m_ids(std::move(ids))
+{
+  m_nextId = static_cast<std::int64_t>(m_opts.id_offset);
+  const double f = m_cam->fx();
+  m_sigmaV = m_opts.init_velocity_std_px / f;
+  m_sigmaA = m_opts.sigma_accel_px / f;
+  m_search.gateChi2 = math::chi2Quantile(m_opts.search_probability, 2);
+  m_search.minScore = m_opts.min_ncc;
+  m_search.maxHalfExtentPx = m_opts.max_search_half_extent_px;
+}
+
+std::size_t CShadowFilter::numPending() const
+{
+  return static_cast<std::size_t>(std::count_if(m_features.begin(), m_features.end(),
+                                                [](const TShadowFeature& f) { return f.cls == EShadowClass::Pending; }));
+}
+
+std::size_t CShadowFilter::numDynamic() const { return m_features.size() - numPending(); }
+
+const TShadowFeature* CShadowFilter::feature(std::int64_t id) const
+{
+  for (const auto& f : m_features)
+    if (f.id == id) return &f;
+  return nullptr;
+}
+
+void CShadowFilter::removeFeatures(const std::vector<std::int64_t>& ids)
+{
+  m_features.erase(std::remove_if(m_features.begin(), m_features.end(),
+                                  [&](const TShadowFeature& f)
+                                  { return std::find(ids.begin(), ids.end(), f.id) != ids.end(); }),
+                   m_features.end());
+}
+
+std::vector<Vec2> CShadowFilter::occupiedPixels() const
+{
+  std::vector<Vec2> out;
+  out.reserve(m_features.size());
+  for (const auto& f : m_features) out.push_back(f.measured ? f.uv : f.predicted);
+  return out;
+}
+
+std::vector<std::int64_t> CShadowFilter::addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv)
+{
+  if (!grey.empty() && (grey.type() != CV_8UC1 || grey.cols != m_cam->width() || grey.rows != m_cam->height()))
+    throw std::runtime_error("shadow::CShadowFilter::addFeatures: expected a CV_8UC1 image of the camera's size");
+  std::vector<std::int64_t> ids;
+  ids.reserve(uv.size());
+  for (const Vec2& p : uv)
+  {
+    if (static_cast<int>(m_features.size()) >= m_opts.max_features || !p.allFinite())
+    {
+      ids.push_back(-1);
+      continue;
+    }
+    TShadowFeature f;
+    if (!grey.empty() && !f.patch.extract(grey, p, m_opts.patch_half_size))
+    {
+      ids.push_back(-1);
+      continue;
+    }
+    f.ekf = initialiseShadowState(*m_cam, p, m_opts.sigma_pixel, m_opts.init_rho, m_opts.init_rho_std, m_sigmaV);
+    f.id = m_ids ? m_ids() : m_nextId++;
+    f.firstFrame = m_motion.frame;
+    f.track.start(m_motion.frame, p);
+    f.uv = f.predicted = p;
+    f.measured = true;  // observed in the current frame
+    f.nMeasured = 1;
+    ids.push_back(f.id);
+    m_features.push_back(std::move(f));
+  }
+  return ids;
+}
+
+void CShadowFilter::beginFrame(const TCameraMotion& motion)
+{
+  m_t0 = std::chrono::steady_clock::now();
+  if (!(motion.dt > 0) || !motion.t.allFinite() || !motion.dq.allFinite() || !motion.cov_increment.allFinite())
+    throw std::runtime_error("shadow::CShadowFilter: invalid camera motion at frame " + std::to_string(motion.frame));
+  m_motion = motion;
+  m_motion.dq = math::quatNormalized(motion.dq);
+  m_report = TShadowReport();
+  m_report.timestamp = motion.timestamp;
+  m_report.frame = motion.frame;
+  m_started = true;
+}
+
+void CShadowFilter::predictAll(const TCameraMotion& motion)
+{
+  const auto t0 = std::chrono::steady_clock::now();
+  const Mat6 covInc = 0.5 * (motion.cov_increment + motion.cov_increment.transpose());
+  for (auto& f : m_features)
+  {
+    predictShadowState(f.ekf, motion.dt, motion.t, m_motion.dq, covInc, m_sigmaA);
+    f.track.advance(motion.frame, motion.dt, motion.t, m_motion.dq, covInc, m_opts.increment_cov_scale);
+    f.searched = f.measured = false;
+    if (!shadowInnovation(f.ekf, *m_cam, m_opts.sigma_pixel, f.predicted, f.S))
+    {
+      f.predicted = Vec2::Constant(std::numeric_limits<double>::quiet_NaN());
+      f.S = Mat2::Identity();
+    }
+  }
+  m_report.tPredictMs = msSince(t0);
+}
+
+void CShadowFilter::updateFeature(TShadowFeature& f, const Vec2& z)
+{
+  if (!updateShadowState(f.ekf, *m_cam, z, m_opts.sigma_pixel, m_opts.ekf_iterations)) return;
+  f.uv = z;
+  f.measured = true;
+  f.missed = 0;
+  ++f.nMeasured;
+  if (f.cls == EShadowClass::Pending) f.track.addView(z);
+  ++m_report.nMeasured;
+}
+
+void CShadowFilter::searchAll(const cv::Mat& grey)
+{
+  const auto t0 = std::chrono::steady_clock::now();
+  double tUpdate = 0;
+  for (auto& f : m_features)
+  {
+    if (!f.patch.valid() || !f.predicted.allFinite() || !m_cam->isInImage(f.predicted, m_opts.patch_half_size + 1))
+      continue;
+    // Predicted appearance: the plane facing the first camera through the current estimate, in C0.
+    Mat2 A = Mat2::Identity();
+    if (m_opts.warp_patches)
+    {
+      TShadowState s = f.ekf;
+      s.x[kW] = std::max(s.x[kW], 0.01);
+      const Vec3 p_C0 = f.track.T_0k.transform(shadowPosition(s));
+      A = frontend::patchWarp(*m_cam, Vec3::Zero(), Vec4(1, 0, 0, 0), f.track.T_0k.t, f.track.T_0k.q, p_C0,
+                              Vec3::Zero());
+    }
+    f.patch.predictTemplate(A, m_templ);
+    f.searched = true;
+    ++m_report.nSearched;
+    const frontend::TSearchResult res = frontend::searchInEllipse(grey, m_templ, f.predicted, f.S, m_search, m_ws);
+    if (res.found)
+    {
+      const auto tu = std::chrono::steady_clock::now();
+      updateFeature(f, res.uv);
+      tUpdate += msSince(tu);
+    }
+  }
+  m_report.tUpdateMs = tUpdate;
+  m_report.tSearchMs = msSince(t0) - tUpdate;
+}
+
+TPromotion CShadowFilter::makePromotion(const TShadowFeature& f, const TRayTestResult& r) const
+{
+  TPromotion p;
+  p.id = f.id;
+  p.uv = f.uv;
+  // Static triangulation (the classifier's intersection, in C0) seen from the current camera.
+  const Vec4 X = r.test.intersection.X;
+  if (r.evaluated && X.allFinite() && std::abs(X[3]) > 1e-9 * X.norm())
+  {
+    Mat3 cov_x;
+    const Vec3 x = r.test.intersection.euclidean(&cov_x);
+    const Mat3 R = f.track.T_0k.rotation();
+    const Vec3 pk = R.transpose() * (x - f.track.T_0k.t);
+    const double d = pk.norm();
+    if (pk.z() > 0 && d > 0 && cov_x.allFinite())
+    {
+      // Chain rule: rho = 1/|p_k|, d rho/d p_k = -p_k^T/|p_k|^3, p_k = R^T (x - t).
+      const Eigen::RowVector3d J = -pk.transpose() / (d * d * d) * R.transpose();
+      p.rho = 1.0 / d;
+      p.sigmaRho = std::sqrt(std::max(0.0, double(J * cov_x * J.transpose())));
+      p.p_C = pk;
+      p.fromTriangulation = true;
+      if (std::isfinite(p.sigmaRho) && p.sigmaRho > 0) return p;
+    }
+  }
+  p.rho = f.ekf.x[kW];
+  p.sigmaRho = std::sqrt(std::max(f.ekf.P(kW, kW), 0.0));
+  p.p_C = shadowPosition(f.ekf, m_opts.min_inverse_distance);
+  p.fromTriangulation = false;
+  return p;
+}
+
+void CShadowFilter::classifyAndManage()
+{
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<TShadowFeature> kept;
+  kept.reserve(m_features.size());
+  for (auto& f : m_features)
+  {
+    if (!f.measured) ++f.missed;
+    const bool healthy = f.ekf.x.allFinite() && f.ekf.P.allFinite();
+    if (f.cls == EShadowClass::Pending && healthy)
+    {
+      TDecision info;
+      TRayTestResult r;
+      const EShadowClass c = m_classifier.classify(f.track, &info, &r);
+      if (c != EShadowClass::Pending)
+      {
+        info.id = f.id;
+        info.cls = c;
+        info.uv = f.uv;
+        info.timestamp = m_motion.timestamp;
+        info.frame = m_motion.frame;
+        info.ageFrames = static_cast<int>(std::lround(f.track.elapsed));
+        m_report.decisions.push_back(info);
+      }
+      if (c == EShadowClass::Static)
+      {
+        m_report.promotions.push_back(makePromotion(f, r));
+        ++m_report.nPromoted;
+        continue;  // leaves the shadow filter
+      }
+      if (c == EShadowClass::Dynamic)
+      {
+        f.cls = EShadowClass::Dynamic;
+        f.track.views.clear();
+        f.track.views.shrink_to_fit();
+        ++m_report.nNewDynamic;
+      }
+    }
+    if (f.cls == EShadowClass::Pending)
+    {
+      if (!healthy || f.missed > m_opts.max_missed_frames)
+      {
+        ++m_report.nLost;
+        continue;
+      }
+      if (f.track.elapsed >= m_opts.max_pending_frames)
+      {
+        ++m_report.nTimedOut;
+        continue;
+      }
+    }
+    else if (!healthy || f.missed > m_opts.dynamic_max_missed_frames)
+    {
+      ++m_report.nDynamicDropped;
+      continue;
+    }
+    kept.push_back(std::move(f));
+  }
+  m_features.swap(kept);
+  m_report.tClassifyMs = msSince(t0);
+}
+
+TTrackPoint CShadowFilter::trackPoint(const TShadowFeature& f) const
+{
+  TTrackPoint t;
+  t.id = f.id;
+  Mat3 covC;
+  const Vec3 pC = shadowPosition(f.ekf, m_opts.min_inverse_distance, &covC);
+  const Mat3 R = math::quatToRotation(m_motion.q_W_C);
+  t.p_W = m_motion.r_W_C + R * pC;
+  // Chain rule: p_W = r + R Exp(dtheta) p_C -> d p_W = dr - R [p_C]x dtheta.
+  Eigen::Matrix<double, 3, 6> Jpose;
+  Jpose << Mat3::Identity(), -R * math::skew(pC);
+  t.cov_W = R * covC * R.transpose() + Jpose * m_motion.cov_W_C * Jpose.transpose();
+  t.v_W = R * shadowVelocity(f.ekf, m_opts.min_inverse_distance);
+  t.measured = f.measured;
+  t.uv = f.measured ? f.uv : f.predicted;
+  t.inverseDistance = f.ekf.x[kW];
+  return t;
+}
+
+void CShadowFilter::endFrame()
+{
+  for (const auto& f : m_features)
+  {
+    TFeatureView v;
+    v.id = f.id;
+    v.cls = f.cls;
+    v.predicted = f.predicted;
+    v.uv = f.measured ? f.uv : f.predicted;
+    v.S = f.S;
+    v.searched = f.searched;
+    v.measured = f.measured;
+    v.ageFrames = static_cast<int>(std::lround(f.track.elapsed));
+    m_report.views.push_back(v);
+    if (f.cls == EShadowClass::Dynamic)
+    {
+      m_report.tracks.push_back(trackPoint(f));
+      ++m_report.nDynamic;
+    }
+    else
+      ++m_report.nPending;
+  }
+  m_report.timeMs = msSince(m_t0);
+}
+
+const TShadowReport& CShadowFilter::processFrame(const TCameraMotion& motion, const cv::Mat& grey)
+{
+  if (grey.empty() || grey.type() != CV_8UC1 || grey.cols != m_cam->width() || grey.rows != m_cam->height())
+    throw std::runtime_error("shadow::CShadowFilter::processFrame: expected a CV_8UC1 image of the camera's size "
+                             "at frame " + std::to_string(motion.frame));
+  beginFrame(motion);
+  predictAll(m_motion);
+  searchAll(grey);
+  classifyAndManage();
+  endFrame();
+  return m_report;
+}
+
+const TShadowReport& CShadowFilter::processMeasurements(const TCameraMotion& motion,
+                                                        const std::vector<std::pair<std::int64_t, Vec2>>& z)
+{
+  beginFrame(motion);
+  predictAll(m_motion);
+  const auto t0 = std::chrono::steady_clock::now();
+  std::unordered_map<std::int64_t, std::size_t> index;
+  for (std::size_t i = 0; i < m_features.size(); ++i) index.emplace(m_features[i].id, i);
+  for (const auto& [id, uv] : z)
+  {
+    const auto it = index.find(id);
+    if (it == index.end() || !uv.allFinite()) continue;
+    TShadowFeature& f = m_features[it->second];
+    if (f.measured) continue;  // one measurement per feature and frame
+    f.searched = true;
+    ++m_report.nSearched;
+    updateFeature(f, uv);
+  }
+  m_report.tUpdateMs = msSince(t0);
+  classifyAndManage();
+  endFrame();
+  return m_report;
+}
+}  // namespace immslam::shadow

