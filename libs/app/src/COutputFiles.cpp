@@ -9,7 +9,8 @@ namespace immslam::app
 {
 namespace fs = std::filesystem;
 
-COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& slam, bool searchLog) : m_dir(dir)
+COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& slam, bool shadow, bool searchLog)
+    : m_dir(dir)
 {
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -25,7 +26,15 @@ COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& sla
                                "n_depth_known", "time_ms", "frame", "dt_frames", "n_found", "n_low_innovation",
                                "n_rescued", "n_hypotheses", "n_added", "n_deleted", "n_converted", "slam_ms",
                                "predict_ms", "search_ms", "ransac_ms", "update_ms", "map_ms", "dominant_model",
-                               "expanded_search", "sigma_pixel"});
+                               "expanded_search", "sigma_pixel", "shadow_ms", "n_promoted", "n_handed_over",
+                               "n_new_shadow", "n_shadow_pending", "n_dynamic"});
+  if (shadow)
+  {
+    m_classes = std::make_unique<io::CCsvWriter>(path("classifications.csv"),
+                                                 std::vector<std::string>{"timestamp", "feature_id", "class", "u", "v"});
+    m_tracks = std::make_unique<io::CCsvWriter>(
+        path("tracks.csv"), std::vector<std::string>{"timestamp", "feature_id", "x", "y", "z", "u", "v", "vx", "vy", "vz"});
+  }
   if (searchLog)
     m_searches = std::make_unique<io::CCsvWriter>(
         path("searches.csv"), std::vector<std::string>{"timestamp", "feature_id", "h_u", "h_v", "s_uu", "s_uv", "s_vv",
@@ -50,10 +59,25 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
 
   int best = 0;
   mu.maxCoeff(&best);
+  int nPending = 0, nDynamic = 0;
+  if (fr.shadow)
+    for (const auto& v : fr.shadow->views) (v.cls == shadow::EShadowClass::Dynamic ? nDynamic : nPending)++;
   m_stats->addCells({r.timestamp, r.nMap, r.nPredicted, r.nMatched, r.nRejected, r.meanSearchAreaPx2, r.nDepthKnown,
                      fr.totalMs, r.frame, r.dtFrames, r.nFound, r.nLowInnovation, r.nRescued, r.nHypotheses, r.nAdded,
                      r.nDeleted, r.nConverted, r.timeMs, r.tPredictMs, r.tSearchMs, r.tRansacMs, r.tUpdateMs, r.tMapMs,
-                     slam.models()[best].name, r.expandedSearch ? 1 : 0, r.sigmaPixel});
+                     slam.models()[best].name, r.expandedSearch ? 1 : 0, r.sigmaPixel, fr.shadowMs, fr.promoted,
+                     fr.handedOver, fr.newShadow, nPending, nDynamic});
+  if (fr.shadow && m_classes)
+  {
+    for (const auto& d : fr.shadow->decisions)
+      m_classes->addCells({r.timestamp, d.id, shadow::className(d.cls), d.uv.x(), d.uv.y()});
+    m_classes->flush();
+    for (const auto& t : fr.shadow->tracks)
+      if (t.measured)
+        m_tracks->addCells({r.timestamp, t.id, t.p_W.x(), t.p_W.y(), t.p_W.z(), t.uv.x(), t.uv.y(), t.v_W.x(), t.v_W.y(),
+                            t.v_W.z()});
+    m_tracks->flush();
+  }
   m_stats->flush();
   if (m_searches)
   {

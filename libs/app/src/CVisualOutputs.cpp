@@ -29,7 +29,7 @@ CVisualOutputs::CVisualOutputs(const std::string& outDir, const TOutputOptions& 
 CVisualOutputs::~CVisualOutputs() = default;
 
 viz::TSceneContent CVisualOutputs::sceneContent(const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
-                                                const std::string& title)
+                                                const std::string& title) const
 {
   viz::TSceneContent c;
   c.trajectory = trajectory;
@@ -47,13 +47,19 @@ viz::TSceneContent CVisualOutputs::sceneContent(const slam::CMonoSlamIMM& slam, 
     if (e.inverseDepth) p.inverseDepth = viz::TInverseDepthView{e.anchor_W, e.theta, e.phi, e.rho, e.cov_tpr};
     c.points.push_back(p);
   }
+  for (const auto& [id, line] : m_tracks)
+    if (line.size() >= 2) c.tracks.push_back(viz::TTrackView{id, line, viz::ETrackClass::Dynamic, std::nullopt});
   return c;
 }
 
-void CVisualOutputs::onFrame(std::size_t frameIndex, const cv::Mat& image, const slam::CMonoSlamIMM& slam,
-                             const eval::TTrajectory& trajectory, const std::vector<std::string>& extraText)
+void CVisualOutputs::onFrame(std::size_t frameIndex, const cv::Mat& image, const system::TSystemFrame& fr,
+                             const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
+                             const std::vector<std::string>& extraText)
 {
   const auto& r = slam.lastReport();
+  if (fr.shadow)
+    for (const auto& t : fr.shadow->tracks)
+      if (t.measured) m_tracks[t.id].push_back(t.p_W);
   m_times.push_back(r.timestamp);
   m_areas.push_back(r.meanSearchAreaPx2);
   m_probs.push_back(slam.modelProbabilities());
@@ -75,7 +81,14 @@ void CVisualOutputs::onFrame(std::size_t frameIndex, const cv::Mat& image, const
                                                     : viz::ESearchStatus::NotFound;
       if (s.found) v.z = s.z;
       oc.searches.push_back(v);
+      // SLAM features are the static ones (MonoSLAMBOT Fig. 4: static / dynamic / pending).
+      if (fr.shadow && s.found) oc.features.push_back(viz::TFeatureView{s.z, viz::EFeatureClass::Static, s.id});
     }
+    if (fr.shadow)
+      for (const auto& v : fr.shadow->views)
+        oc.features.push_back(viz::TFeatureView{
+            v.uv, v.cls == shadow::EShadowClass::Dynamic ? viz::EFeatureClass::Dynamic : viz::EFeatureClass::Pending,
+            v.id});
     char buf[160];
     std::snprintf(buf, sizeof buf, "frame %lld  t %.3f s  map %d  matched %d", static_cast<long long>(r.frame),
                   r.timestamp, r.nMap, r.nMatched);

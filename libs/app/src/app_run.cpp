@@ -203,7 +203,7 @@ int CImmMonoSlamApp::runImpl()
   {
     throw std::runtime_error(m_args.config + ": " + e.what());
   }
-  COutputFiles out(m_args.outDir, sys->slam(), outOpts.search_log);
+  COutputFiles out(m_args.outDir, sys->slam(), sys->shadowFilter() != nullptr, outOpts.search_log);
   CVisualOutputs visuals(m_args.outDir, outOpts, sys->slam());
   // True motion labels per processed frame, when the input knows them (for the probability plot).
   auto* synthetic = dynamic_cast<sim::CSyntheticSource*>(source.get());
@@ -287,7 +287,7 @@ int CImmMonoSlamApp::runImpl()
       throw std::runtime_error("frame " + std::to_string(frame.index) + " (" + frame.origin + "): " + e.what());
     }
     out.addFrame(*fr, sys->slam());
-    visuals.onFrame(m_summary.framesProcessed, frame.colour.empty() ? frame.grey : frame.colour, sys->slam(),
+    visuals.onFrame(m_summary.framesProcessed, frame.colour.empty() ? frame.grey : frame.colour, *fr, sys->slam(),
                     out.trajectory());
     if (synthetic)
       labels.push_back(sim::toString(synthetic->label(frame.index)));

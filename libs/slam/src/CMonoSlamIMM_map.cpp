@@ -162,6 +162,9 @@ const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& 
         const int c = candOf[rec.id];
         rec.status = used[c] ? TSearchRecord::EStatus::LowInnovationInlier
                              : isHigh[c] ? TSearchRecord::EStatus::RescuedInlier : TSearchRecord::EStatus::Rejected;
+        // Track record of outlier rejections (a feature that starts moving is rejected frame after frame).
+        TFeature& f = m_features[cands[c].feature];
+        f.rejectedInRow = rec.status == TSearchRecord::EStatus::Rejected ? f.rejectedInRow + 1 : 0;
       }
     }
     m_report.tUpdateMs = msSince(t);
@@ -311,15 +314,9 @@ std::vector<frontend::TCorner> CMonoSlamIMM::findNewFeatureCandidates(const cv::
   return frontend::detectInEmptyCells(grey, occupied, maxNew, p);
 }
 
-int CMonoSlamIMM::wantedNewFeatures() const
-{
-  if (m_frame < 0) return m_opts.initial_features;
-  const int visible = m_report.nPredicted;
-  return std::clamp(m_opts.min_visible_features - visible, 0, m_opts.max_new_features_per_frame);
-}
-
 std::vector<std::int64_t> CMonoSlamIMM::addFeaturesAt(const cv::Mat& grey, const std::vector<Vec2>& uvs,
-                                                      const std::vector<std::pair<double, double>>& rhoPrior)
+                                                      const std::vector<std::pair<double, double>>& rhoPrior,
+                                                      const std::vector<std::int64_t>& givenIds)
 {
   std::vector<std::int64_t> ids(uvs.size(), -1);
   // Bounded map: evict the features unseen for longest (not visible now) to make room.
@@ -349,7 +346,7 @@ std::vector<std::int64_t> CMonoSlamIMM::addFeaturesAt(const cv::Mat& grey, const
     ray.sigmaRho = i < rhoPrior.size() ? rhoPrior[i].second : m_opts.init_rho_std;
     ray.sigmaPixel = m_sigmaPixel;
     rays.push_back(ray);
-    f.id = m_nextId++;
+    f.id = i < givenIds.size() ? givenIds[i] : m_nextId++;
     f.kind = EFeatureKind::InverseDepth;
     f.r0 = m_rWC;
     f.q0 = m_qWC;

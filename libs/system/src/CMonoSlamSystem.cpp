@@ -1,19 +1,31 @@
-/* imm-monoslam — wiring of the SLAM filter (and the shadow filter) per frame. */
+/* imm-monoslam — wiring of the SLAM filter and the shadow filter per frame (MonoSLAMBOT Fig. 1). */
 #include <immslam/core/config.h>
+#include <immslam/math/quaternion.h>
 #include <immslam/system/CMonoSlamSystem.h>
 
+#include <algorithm>
 #include <chrono>
 
 namespace immslam::system
 {
+namespace
+{
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+}  // namespace
+
 void CMonoSlamSystem::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
   IMMSLAM_LOAD_BOOL(shadow_filter);
+  IMMSLAM_LOAD_INT(handover_rejections);
+  core::requireNonNegative(handover_rejections, s, "handover_rejections");
 }
 
 void CMonoSlamSystem::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
 {
   MRPT_SAVE_CONFIG_VAR_COMMENT(shadow_filter, "new features go first to the MonoSLAMBOT shadow filter");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(handover_rejections,
+                               "SLAM features rejected this many frames in a row go back to the shadow filter (0: never)");
 }
 
 CMonoSlamSystem::CMonoSlamSystem(const mrpt::config::CConfigFileBase& cfg, camera::CCameraModel::Ptr cam)
@@ -22,29 +34,104 @@ CMonoSlamSystem::CMonoSlamSystem(const mrpt::config::CConfigFileBase& cfg, camer
   m_slamOpts.loadFromConfigFile(cfg, "slam");
   m_bankOpts.loadFromConfigFile(cfg, "imm");
   m_ransacOpts.loadFromConfigFile(cfg, "ransac");
+  m_shadowOpts.loadFromConfigFile(cfg, "shadow");
+  m_slam = std::make_unique<slam::CMonoSlamIMM>(m_slamOpts, m_bankOpts, m_ransacOpts, cam);
   if (m_opts.shadow_filter)
-    throw std::runtime_error("[system] shadow_filter = true: the shadow filter is not available in this build yet");
-  m_slam = std::make_unique<slam::CMonoSlamIMM>(m_slamOpts, m_bankOpts, m_ransacOpts, std::move(cam));
+    m_shadow = std::make_unique<shadow::CShadowFilter>(m_shadowOpts, cam, [this] { return m_slam->allocateId(); });
 }
 
 CMonoSlamSystem::~CMonoSlamSystem() = default;
 
+shadow::TCameraMotion CMonoSlamSystem::cameraMotion(double timestamp, double dt) const
+{
+  // The SLAM camera pose and its motion since the previous frame, with covariances.
+  const Vec3 r = m_slam->cameraPosition();
+  const Vec4 q = m_slam->cameraOrientation();
+  shadow::TCameraMotion m = shadow::TCameraMotion::FromPoses(m_prevR, m_prevQ, r, q);
+  m.timestamp = timestamp;
+  m.frame = m_slam->lastReport().frame;
+  m.dt = dt;
+  // Pose covariance in [dr; dtheta] with R = R_est Exp(dtheta): dtheta = 2 vec(conj(q_est) (x) q).
+  Mat4 L;
+  math::quatMultiply(math::quatConjugate(q), q, nullptr, &L);
+  Eigen::Matrix<double, 6, 7> J = Eigen::Matrix<double, 6, 7>::Zero();
+  J.topLeftCorner<3, 3>().setIdentity();
+  J.bottomRightCorner<3, 4>() = 2.0 * L.bottomRows<3>();
+  m.cov_W_C = J * m_slam->cameraPoseCovariance() * J.transpose();
+  // Increment covariance from the velocities' (t = v dt, dtheta = w dt, first order).
+  m.cov_increment = m_slam->velocityCovariance() * dt * dt;
+  return m;
+}
+
 const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Mat& grey)
 {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
+  m_frame = TSystemFrame();
   m_frame.slam = &m_slam->processFrame(timestamp, grey);
-  // Map management: new features where the image is empty of tracked ones.
-  if (m_frame.slam->frame > 0)
+  const auto& rep = *m_frame.slam;
+  if (rep.frame > 0)
   {
-    const int want = m_slam->wantedNewFeatures();
+    int pendingVisible = 0;
+    std::vector<Vec2> avoid;
+    if (m_shadow)
+    {
+      // Shadow filter with the SLAM's camera motion; promotions into SLAM keep their ids and the
+      // shadow's inverse-depth estimate as the prior.
+      const auto ts = Clock::now();
+      const auto& srep = m_shadow->processFrame(cameraMotion(timestamp, rep.dtFrames), grey);
+      m_frame.shadow = &srep;
+      std::vector<Vec2> uv;
+      std::vector<std::pair<double, double>> prior;
+      std::vector<std::int64_t> ids;
+      for (const auto& p : srep.promotions)
+      {
+        uv.push_back(p.uv);
+        prior.emplace_back(p.rho, p.sigmaRho);
+        ids.push_back(p.id);
+      }
+      const auto added = m_slam->addFeaturesAt(grey, uv, prior, ids);
+      m_frame.promoted = static_cast<int>(std::count_if(added.begin(), added.end(), [](auto id) { return id >= 0; }));
+      // SLAM features rejected frame after frame: handed back to the shadow filter at their pixel.
+      if (m_opts.handover_rejections > 0)
+      {
+        std::vector<std::int64_t> drop;
+        std::vector<Vec2> at;
+        for (const auto& s : rep.searches)
+          if (s.status == slam::TSearchRecord::EStatus::Rejected)
+            for (const auto& f : m_slam->features())
+              if (f.id == s.id && f.rejectedInRow >= m_opts.handover_rejections)
+              {
+                drop.push_back(f.id);
+                at.push_back(s.z);
+              }
+        if (!drop.empty())
+        {
+          m_slam->removeFeatures(drop);
+          m_shadow->addFeatures(grey, at);
+          m_frame.handedOver = static_cast<int>(drop.size());
+        }
+      }
+      for (const auto& v : srep.views) pendingVisible += (v.cls == shadow::EShadowClass::Pending && v.searched) ? 1 : 0;
+      avoid = m_shadow->occupiedPixels();
+      m_frame.shadowMs = msSince(ts);
+    }
+    // Map management: new features where the image is empty of SLAM and shadow features.
+    const auto& so = m_slam->options();
+    const int visible = rep.nPredicted + pendingVisible;
+    const int want = std::clamp(so.min_visible_features - visible, 0, so.max_new_features_per_frame);
     if (want > 0)
     {
       std::vector<Vec2> uv;
-      for (const auto& c : m_slam->findNewFeatureCandidates(grey, want)) uv.push_back(c.uv);
-      m_slam->addFeaturesAt(grey, uv);
+      for (const auto& c : m_slam->findNewFeatureCandidates(grey, want, avoid)) uv.push_back(c.uv);
+      if (m_shadow)
+        m_frame.newShadow = static_cast<int>(m_shadow->addFeatures(grey, uv).size());
+      else
+        m_slam->addFeaturesAt(grey, uv);
     }
   }
-  m_frame.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  m_prevR = m_slam->cameraPosition();
+  m_prevQ = m_slam->cameraOrientation();
+  m_frame.totalMs = msSince(t0);
   return m_frame;
 }
 
@@ -54,6 +141,7 @@ void CMonoSlamSystem::saveEffectiveConfig(mrpt::config::CConfigFileBase& cfg) co
   m_slamOpts.saveToConfigFile(cfg, "slam");
   m_bankOpts.saveToConfigFile(cfg, "imm");
   m_ransacOpts.saveToConfigFile(cfg, "ransac");
+  m_shadowOpts.saveToConfigFile(cfg, "shadow");
 }
 
 std::map<std::string, std::set<std::string>> CMonoSlamSystem::knownKeys()
@@ -61,6 +149,7 @@ std::map<std::string, std::set<std::string>> CMonoSlamSystem::knownKeys()
   return {{"system", core::knownKeys(TOptions(), "system")},
           {"slam", core::knownKeys(slam::CMonoSlamIMM::TOptions(), "slam")},
           {"imm", core::knownKeys(slam::TIMMBankOptions(), "imm")},
-          {"ransac", core::knownKeys(slam::COnePointRansac::TOptions(), "ransac")}};
+          {"ransac", core::knownKeys(slam::COnePointRansac::TOptions(), "ransac")},
+          {"shadow", core::knownKeys(shadow::CShadowFilter::TOptions(), "shadow")}};
 }
 }  // namespace immslam::system

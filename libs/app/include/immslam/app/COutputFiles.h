@@ -18,7 +18,8 @@ class COutputFiles
  public:
   /** Creates the folder and the per-frame files (existing files are overwritten).
    * \throws std::runtime_error naming the path that cannot be created. */
-  COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& slam, bool searchLog = false);
+  /** \param shadow also classifications.csv and tracks.csv (shadow filter on). */
+  COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& slam, bool shadow, bool searchLog = false);
 
   /** Appends one processed frame to trajectory.txt, model_probabilities.csv and frame_stats.csv. */
   void addFrame(const system::TSystemFrame& fr, const slam::CMonoSlamIMM& slam);
@@ -32,7 +33,7 @@ class COutputFiles
  private:
   std::string m_dir;
   std::ofstream m_trajFile;
-  std::unique_ptr<io::CCsvWriter> m_probs, m_stats, m_searches;
+  std::unique_ptr<io::CCsvWriter> m_probs, m_stats, m_searches, m_classes, m_tracks;
   eval::TTrajectory m_traj;
 };
 }  // namespace immslam::app

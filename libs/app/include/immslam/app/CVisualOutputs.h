@@ -5,9 +5,11 @@
 #include <immslam/app/app_options.h>
 #include <immslam/eval/ate.h>
 #include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/system/CMonoSlamSystem.h>
 #include <immslam/viz/COverlayWriter.h>
 #include <immslam/viz/scene.h>
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,8 +24,9 @@ class CVisualOutputs
   ~CVisualOutputs();
 
   /** Per processed frame: overlay (when enabled), periodic scene, and the series for the plots. */
-  void onFrame(std::size_t frameIndex, const cv::Mat& image, const slam::CMonoSlamIMM& slam,
-               const eval::TTrajectory& trajectory, const std::vector<std::string>& extraText = {});
+  void onFrame(std::size_t frameIndex, const cv::Mat& image, const system::TSystemFrame& fr,
+               const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
+               const std::vector<std::string>& extraText = {});
 
   /** At the end: scene.3Dscene (+ scene.png), plots. \param labels true motion label per processed
    * frame (empty if unknown). Never throws for a figure that cannot be made (logs a warning). */
@@ -32,8 +35,8 @@ class CVisualOutputs
               const std::vector<std::string>& labels, std::vector<std::string>& warnings);
 
   /** Scene content of the current state (trajectory, camera, map with uncertainties). */
-  static viz::TSceneContent sceneContent(const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
-                                         const std::string& title);
+  viz::TSceneContent sceneContent(const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
+                                  const std::string& title) const;
 
  private:
   std::string m_dir;
@@ -42,5 +45,6 @@ class CVisualOutputs
   std::vector<double> m_times, m_areas;
   std::vector<VecX> m_probs;
   std::vector<std::string> m_modelNames;
+  std::map<std::int64_t, std::vector<Vec3>> m_tracks;  ///< dynamic tracks (world positions) by id
 };
 }  // namespace immslam::app

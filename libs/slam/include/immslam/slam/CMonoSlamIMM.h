@@ -193,15 +193,19 @@ class CMonoSlamIMM
   std::vector<frontend::TCorner> findNewFeatureCandidates(const cv::Mat& grey, int maxNew,
                                                           const std::vector<Vec2>& alsoOccupied = {}) const;
 
-  /** Number of new features the map management wants now (0 if enough are visible). */
-  int wantedNewFeatures() const;
-
   /** Adds inverse-depth features observed at pixels uv in `grey` (the current frame) to every mode
    * (undelayed initialisation with each mode's own camera estimate). rho/sigmaRho per feature
    * default to the [slam] prior. Returns the new ids (-1 where the patch did not fit). With an empty
-   * `grey` no patch is stored (features for processMeasurements only). */
+   * `grey` no patch is stored (features for processMeasurements only). `ids` (optional, same size
+   * as uv) gives the features ids from allocateId(). */
   std::vector<std::int64_t> addFeaturesAt(const cv::Mat& grey, const std::vector<Vec2>& uv,
-                                          const std::vector<std::pair<double, double>>& rhoPrior = {});
+                                          const std::vector<std::pair<double, double>>& rhoPrior = {},
+                                          const std::vector<std::int64_t>& ids = {});
+
+  /** A new feature id, unique among the features of this filter and of any tracker that takes its
+   * ids from here (the shadow filter). \param ids optional ids for addFeaturesAt (e.g. a promoted
+   * shadow feature keeps its id). */
+  std::int64_t allocateId() { return m_nextId++; }
 
   // ---- Results (IMM-fused posterior, paper Fig. 2 step 4) ----
   /** Camera pose T_W_C: position and quaternion [qw qx qy qz] (from the fused T_C_W). */
@@ -209,6 +213,10 @@ class CMonoSlamIMM
   Vec4 cameraOrientation() const { return m_qWC; }
   /** Covariance of [r_W_C; q_W_C] (7x7, first order through the inversion of T_C_W). */
   Eigen::Matrix<double, 7, 7> cameraPoseCovariance() const;
+  /** Covariance of the camera velocities (v, w) in the current camera frame (6x6, fused). */
+  Mat6 velocityCovariance() const { return fusedCovarianceBlock(motion::kV, 6); }
+  /** The fused velocities (v, w) in the current camera frame (length, rad per frame). */
+  Vec6 velocity() const { return m_xFused.segment<6>(motion::kV); }
   /** Fused state mean (x only; cheap). The state is camera-centred: (r_CW, q_CW, v, w) then the
    * features in the current camera frame. */
   const VecX& fusedMean() const { return m_xFused; }

@@ -35,6 +35,7 @@ struct TFeature
   int nPredicted = 0;         ///< frames it was predicted inside the image and searched
   int nMatched = 0;           ///< frames its measurement was used in the update
   std::int64_t lastSeenFrame = 0;  ///< last frame it was predicted inside the image
+  int rejectedInRow = 0;      ///< consecutive frames it was found but rejected as an outlier
 
   int dim() const { return featureDim(kind); }
 };

@@ -1,9 +1,12 @@
-/* imm-monoslam — the full system of the two papers wired together (MonoSLAMBOT Fig. 1): the
- * IMM SLAM filter (static world) and, when enabled, the shadow filter that holds new features until
- * they are classified. One role per class; this class only wires them and owns no maths. */
+/* imm-monoslam — the full system of the two papers wired together (MonoSLAMBOT Fig. 1): the IMM SLAM
+ * filter estimates the camera and the static map; the shadow filter holds every new feature until it
+ * is classified static (promoted into SLAM, with the shadow's inverse-depth estimate) or dynamic
+ * (tracked, its trajectory output). SLAM features that start moving (rejected as outliers frame after
+ * frame) are handed back to the shadow filter. This class only wires the two; it owns no maths. */
 #pragma once
 
 #include <immslam/camera/CCameraModel.h>
+#include <immslam/shadow/CShadowFilter.h>
 #include <immslam/slam/CMonoSlamIMM.h>
 
 #include <mrpt/config/CConfigFileBase.h>
@@ -20,8 +23,13 @@ namespace immslam::system
 /** Result of one frame of the whole system. */
 struct TSystemFrame
 {
-  const slam::TFrameReport* slam = nullptr;  ///< the SLAM filter's report (valid until the next frame)
-  double totalMs = 0;                        ///< wall time of processFrame (image decoding excluded)
+  const slam::TFrameReport* slam = nullptr;      ///< the SLAM filter's report (valid until the next frame)
+  const shadow::TShadowReport* shadow = nullptr; ///< the shadow filter's report, or null (off / first frame)
+  int promoted = 0;     ///< shadow features promoted into SLAM this frame
+  int handedOver = 0;   ///< SLAM features handed to the shadow filter (caught moving)
+  int newShadow = 0;    ///< new features given to the shadow filter
+  double shadowMs = 0;  ///< wall time of the shadow filter
+  double totalMs = 0;   ///< wall time of processFrame (image decoding excluded)
 };
 
 class CMonoSlamSystem
@@ -30,13 +38,16 @@ class CMonoSlamSystem
   /** Options of the wiring (section [system]). */
   struct TOptions : public mrpt::config::CLoadableOptions
   {
-    /** Where new features go: into the SLAM filter directly (false) or first to the shadow filter. */
+    /** New features go first to the MonoSLAMBOT shadow filter (true) or straight into SLAM (false). */
     bool shadow_filter = false;
+    /** A SLAM feature found but rejected as an outlier in this many consecutive frames is removed from
+     * SLAM and re-initialised in the shadow filter (it may have started to move). 0: never. */
+    int handover_rejections = 3;
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
     void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
   };
 
-  /** Loads [system], [slam], [imm], [ransac] (and [shadow]) from cfg.
+  /** Loads [system], [slam], [imm], [ransac] and [shadow] from cfg.
    * \throws std::runtime_error naming the section/key of a bad value. */
   CMonoSlamSystem(const mrpt::config::CConfigFileBase& cfg, camera::CCameraModel::Ptr cam);
   ~CMonoSlamSystem();
@@ -46,6 +57,8 @@ class CMonoSlamSystem
 
   const slam::CMonoSlamIMM& slam() const { return *m_slam; }
   slam::CMonoSlamIMM& slam() { return *m_slam; }
+  /** The shadow filter, or null when off. */
+  const shadow::CShadowFilter* shadowFilter() const { return m_shadow.get(); }
   const TOptions& options() const { return m_opts; }
 
   /** Writes every effective option of the system (all sections) into cfg. */
@@ -54,11 +67,17 @@ class CMonoSlamSystem
   static std::map<std::string, std::set<std::string>> knownKeys();
 
  private:
+  shadow::TCameraMotion cameraMotion(double timestamp, double dt) const;
+
   TOptions m_opts;
   slam::CMonoSlamIMM::TOptions m_slamOpts;
   slam::TIMMBankOptions m_bankOpts;
   slam::COnePointRansac::TOptions m_ransacOpts;
+  shadow::CShadowFilter::TOptions m_shadowOpts;
   std::unique_ptr<slam::CMonoSlamIMM> m_slam;
+  std::unique_ptr<shadow::CShadowFilter> m_shadow;
   TSystemFrame m_frame;
+  Vec3 m_prevR = Vec3::Zero();
+  Vec4 m_prevQ = Vec4(1, 0, 0, 0);
 };
 }  // namespace immslam::system
