@@ -211,6 +211,33 @@ TPromotion CShadowFilter::makePromotion(const TShadowFeature& f, const TRayTestR
   return p;
 }
 
+std::vector<TPromotion> CShadowFilter::releaseUnresolved(int maxCount, int minMeasured)
+{
+  std::vector<std::size_t> idx;
+  for (std::size_t i = 0; i < m_features.size(); ++i)
+  {
+    const auto& f = m_features[i];
+    if (f.cls == EShadowClass::Pending && f.measured && f.nMeasured >= minMeasured && f.track.rejections == 0)
+      idx.push_back(i);
+  }
+  std::stable_sort(idx.begin(), idx.end(),
+                   [&](std::size_t a, std::size_t b) { return m_features[a].firstFrame < m_features[b].firstFrame; });
+  if (static_cast<int>(idx.size()) > maxCount) idx.resize(static_cast<std::size_t>(std::max(maxCount, 0)));
+  std::vector<TPromotion> out;
+  std::vector<char> drop(m_features.size(), 0);
+  for (std::size_t i : idx)
+  {
+    out.push_back(makePromotion(m_features[i], TRayTestResult()));
+    drop[i] = 1;
+  }
+  std::vector<TShadowFeature> kept;
+  kept.reserve(m_features.size());
+  for (std::size_t i = 0; i < m_features.size(); ++i)
+    if (!drop[i]) kept.push_back(std::move(m_features[i]));
+  m_features = std::move(kept);
+  return out;
+}
+
 void CShadowFilter::classifyAndManage()
 {
   const auto t0 = std::chrono::steady_clock::now();

@@ -18,7 +18,11 @@ void CMonoSlamSystem::TOptions::loadFromConfigFile(const mrpt::config::CConfigFi
 {
   IMMSLAM_LOAD_BOOL(shadow_filter);
   IMMSLAM_LOAD_INT(handover_rejections);
+  IMMSLAM_LOAD_INT(starved_below);
+  IMMSLAM_LOAD_INT(release_min_measured);
   core::requireNonNegative(handover_rejections, s, "handover_rejections");
+  core::requireNonNegative(starved_below, s, "starved_below");
+  core::requirePositive(release_min_measured, s, "release_min_measured");
 }
 
 void CMonoSlamSystem::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
@@ -26,6 +30,9 @@ void CMonoSlamSystem::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& 
   MRPT_SAVE_CONFIG_VAR_COMMENT(shadow_filter, "new features go first to the MonoSLAMBOT shadow filter");
   MRPT_SAVE_CONFIG_VAR_COMMENT(handover_rejections,
                                "SLAM features rejected this many frames in a row go back to the shadow filter (0: never)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(starved_below,
+                               "SLAM short of features (fewer in view): release unresolved shadow features (0: never)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(release_min_measured, "frames a shadow feature must be tracked to be released");
 }
 
 CMonoSlamSystem::CMonoSlamSystem(const mrpt::config::CConfigFileBase& cfg, camera::CCameraModel::Ptr cam)
@@ -80,10 +87,26 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
       const auto ts = Clock::now();
       const auto& srep = m_shadow->processFrame(cameraMotion(timestamp, rep.dtFrames), grey);
       m_frame.shadow = &srep;
+      std::vector<shadow::TPromotion> promotions = srep.promotions;
+      // Without parallax nothing can be classified. While the IMM says the camera is not translating
+      // (stationary and rotation families dominate), the SLAM takes the unresolved features it needs,
+      // as the IMM paper's filter does with inverse depth; with translation, only when starving.
+      const int inView = rep.nPredicted + static_cast<int>(promotions.size());
+      double pGeneral = 0;
+      const VecX mu = m_slam->modelProbabilities();
+      for (int i = 0; i < mu.size(); ++i)
+        if (m_slam->models()[i].family == motion::EMotionFamily::General) pGeneral += mu[i];
+      const int need = pGeneral < 0.5 ? m_slam->options().min_visible_features : m_opts.starved_below;
+      if (m_opts.starved_below > 0 && inView < need)
+      {
+        const auto rel = m_shadow->releaseUnresolved(need - inView, m_opts.release_min_measured);
+        m_frame.released = static_cast<int>(rel.size());
+        promotions.insert(promotions.end(), rel.begin(), rel.end());
+      }
       std::vector<Vec2> uv;
       std::vector<std::pair<double, double>> prior;
       std::vector<std::int64_t> ids;
-      for (const auto& p : srep.promotions)
+      for (const auto& p : promotions)
       {
         uv.push_back(p.uv);
         prior.emplace_back(p.rho, p.sigmaRho);

@@ -134,6 +134,14 @@ class CShadowFilter
   std::size_t numDynamic() const;
   /** All held features (pending + dynamic). */
   std::size_t size() const { return m_features.size(); }
+
+  /** Pending features that cannot be classified yet for lack of parallax (a stationary or rotating
+   * camera) but look static so far: measured in this frame, at least minMeasured frames old, never
+   * rejected by the three-ray test. Up to maxCount of them (oldest first) leave the shadow filter and
+   * are returned as promotions with the shadow EKF's inverse depth (whose prior, without parallax,
+   * still includes infinity). The system uses this only when the SLAM filter runs short of features;
+   * a moving one is caught later by SLAM's outlier rejection and handed back. */
+  std::vector<TPromotion> releaseUnresolved(int maxCount, int minMeasured);
   /** The held features (read-only, for overlays and tests). */
   const std::vector<TShadowFeature>& features() const { return m_features; }
   /** The feature with this id, or nullptr. */

@@ -25,7 +25,8 @@ struct TSystemFrame
 {
   const slam::TFrameReport* slam = nullptr;      ///< the SLAM filter's report (valid until the next frame)
   const shadow::TShadowReport* shadow = nullptr; ///< the shadow filter's report, or null (off / first frame)
-  int promoted = 0;     ///< shadow features promoted into SLAM this frame
+  int promoted = 0;     ///< shadow features promoted into SLAM this frame (static or released)
+  int released = 0;     ///< of which released unresolved (SLAM short of features)
   int handedOver = 0;   ///< SLAM features handed to the shadow filter (caught moving)
   int newShadow = 0;    ///< new features given to the shadow filter
   double shadowMs = 0;  ///< wall time of the shadow filter
@@ -43,6 +44,13 @@ class CMonoSlamSystem
     /** A SLAM feature found but rejected as an outlier in this many consecutive frames is removed from
      * SLAM and re-initialised in the shadow filter (it may have started to move). 0: never. */
     int handover_rejections = 3;
+    /** Pending shadow features that cannot be classified for lack of parallax but were never rejected
+     * are released into SLAM with their unresolved inverse depth when SLAM has fewer features in view
+     * than [slam] min_visible_features while the IMM says the camera does not translate (stationary
+     * and rotation families), or fewer than this number whatever the motion. 0: never. */
+    int starved_below = 20;
+    /** ... if tracked for at least this many frames. */
+    int release_min_measured = 10;
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
     void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
   };
