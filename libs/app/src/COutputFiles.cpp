@@ -35,6 +35,10 @@ COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& sla
     m_tracks = std::make_unique<io::CCsvWriter>(
         path("tracks.csv"), std::vector<std::string>{"timestamp", "feature_id", "x", "y", "z", "u", "v", "vx", "vy", "vz"});
   }
+  if (searchLog && shadow)
+    m_shadowLog = std::make_unique<io::CCsvWriter>(
+        path("shadow_log.csv"),
+        std::vector<std::string>{"timestamp", "feature_id", "class", "u", "v", "searched", "measured", "age_frames"});
   if (searchLog)
     m_searches = std::make_unique<io::CCsvWriter>(
         path("searches.csv"), std::vector<std::string>{"timestamp", "feature_id", "h_u", "h_v", "s_uu", "s_uv", "s_vv",
@@ -77,6 +81,13 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
         m_tracks->addCells({r.timestamp, t.id, t.p_W.x(), t.p_W.y(), t.p_W.z(), t.uv.x(), t.uv.y(), t.v_W.x(), t.v_W.y(),
                             t.v_W.z()});
     m_tracks->flush();
+    if (m_shadowLog)
+    {
+      for (const auto& v : fr.shadow->views)
+        m_shadowLog->addCells({r.timestamp, v.id, shadow::className(v.cls), v.uv.x(), v.uv.y(), v.searched ? 1 : 0,
+                               v.measured ? 1 : 0, v.ageFrames});
+      m_shadowLog->flush();
+    }
   }
   m_stats->flush();
   if (m_searches)

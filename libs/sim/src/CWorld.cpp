@@ -31,7 +31,8 @@ struct TAabb
 };
 }  // namespace
 
-int CWorld::addSurfaces(const Vec3& half, std::uint64_t seedBase, bool isRoom, const TScenario& sc)
+int CWorld::addSurfaces(const Vec3& half, std::uint64_t seedBase, bool isRoom, const TScenario& sc,
+                        double shapesPerUnit2, double texelsPerUnit)
 {
   const int first = static_cast<int>(m_surfaces.size());
   for (int f = 0; f < 6; ++f)
@@ -40,7 +41,7 @@ int CWorld::addSurfaces(const Vec3& half, std::uint64_t seedBase, bool isRoom, c
     const std::uint64_t seed = CRandom::mix(seedBase + static_cast<std::uint64_t>(f));
     CRandom rng(CRandom::mix(seed ^ 0xA5A5A5A5ULL));
     TSurface s;
-    s.texture = CTexture::generate(2 * half[j], 2 * half[k], sc.texels_per_unit, sc.shapes_per_unit2, seed);
+    s.texture = CTexture::generate(2 * half[j], 2 * half[k], texelsPerUnit, shapesPerUnit2, seed);
     s.gain = static_cast<float>(isRoom ? rng.uniform(0.85, 1.05) : rng.uniform(0.65, 1.15));
     // A random tint normalized to unit luminance (0.114 B + 0.587 G + 0.299 R).
     std::array<float, 3> t{};
@@ -59,7 +60,8 @@ CWorld::CWorld(const TScenario& sc)
   m_room.T_W_B.t = 0.5 * (sc.room_min + sc.room_max);
   m_room.half = 0.5 * (sc.room_max - sc.room_min);
   m_room.inside = true;
-  m_room.firstSurface = addSurfaces(m_room.half, CRandom::streamSeed(sc.seed, "room"), true, sc);
+  m_room.firstSurface = addSurfaces(m_room.half, CRandom::streamSeed(sc.seed, "room"), true, sc, sc.shapes_per_unit2,
+                                    sc.texels_per_unit);
 
   // Static boxes: rejection sampling from the layout stream.
   CRandom rng(CRandom::streamSeed(sc.seed, "layout"));
@@ -124,7 +126,8 @@ CWorld::CWorld(const TScenario& sc)
     }
   }
   for (std::size_t i = 0; i < m_static.size(); ++i)
-    m_static[i].firstSurface = addSurfaces(m_static[i].half, CRandom::streamSeed(sc.seed, "box", i), false, sc);
+    m_static[i].firstSurface = addSurfaces(m_static[i].half, CRandom::streamSeed(sc.seed, "box", i), false, sc,
+                                               sc.shapes_per_unit2, sc.texels_per_unit);
 
   // Moving objects (own texture streams, after every static surface).
   if (sc.objects_enabled)
@@ -132,7 +135,8 @@ CWorld::CWorld(const TScenario& sc)
     {
       m_objects.push_back(o);
       m_objectFirstSurface.push_back(
-          addSurfaces(0.5 * o.size, CRandom::streamSeed(sc.seed, "object", static_cast<std::uint64_t>(o.id)), false, sc));
+          addSurfaces(0.5 * o.size, CRandom::streamSeed(sc.seed, "object", static_cast<std::uint64_t>(o.id)), false, sc,
+                      sc.object_shapes_per_unit2, sc.object_texels_per_unit));
     }
 }
 

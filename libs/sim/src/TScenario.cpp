@@ -56,7 +56,8 @@ const std::map<std::string, std::set<std::string>>& allowedKeys()
   static const std::map<std::string, std::set<std::string>> k = {
       {"scenario", {"camera", "fps", "seed", "start_time_s", "threads"}},
       {"render",
-       {"noise_sigma_grey", "blur_sigma_px", "colour", "texels_per_unit", "shapes_per_unit2"}},
+       {"noise_sigma_grey", "blur_sigma_px", "colour", "texels_per_unit", "shapes_per_unit2", "object_shapes_per_unit2",
+        "object_texels_per_unit"}},
       {"world",
        {"room_min", "room_max", "n_boxes", "box_size_min", "box_size_max", "wall_box_fraction",
         "keep_out"}},
@@ -304,6 +305,8 @@ TScenario TScenario::fromConfig(const mrpt::config::CConfigFileBase& cfg, const 
     sc.colour = r.boolean("colour", sc.colour);
     sc.texels_per_unit = r.number("texels_per_unit", sc.texels_per_unit);
     sc.shapes_per_unit2 = r.number("shapes_per_unit2", sc.shapes_per_unit2);
+    sc.object_shapes_per_unit2 = r.number("object_shapes_per_unit2", sc.object_shapes_per_unit2);
+    sc.object_texels_per_unit = r.number("object_texels_per_unit", sc.object_texels_per_unit);
   }
   {
     const auto r = reader("world");
@@ -376,6 +379,10 @@ void TScenario::validate() const
   if (!(blur_sigma_px >= 0 && blur_sigma_px <= 20)) bad("[render] blur_sigma_px", "must be in [0, 20]");
   if (!(texels_per_unit >= 8 && texels_per_unit <= 1000)) bad("[render] texels_per_unit", "must be in [8, 1000]");
   if (!(shapes_per_unit2 >= 0 && shapes_per_unit2 <= 10000)) bad("[render] shapes_per_unit2", "must be in [0, 10000]");
+  if (!(object_shapes_per_unit2 >= 0 && object_shapes_per_unit2 <= 10000))
+    bad("[render] object_shapes_per_unit2", "must be in [0, 10000]");
+  if (!(object_texels_per_unit >= 10 && object_texels_per_unit <= 4000))
+    bad("[render] object_texels_per_unit", "must be in [10, 4000]");
   if (!((room_max - room_min).minCoeff() > 0)) bad("[world] room_max", "must exceed room_min on every axis");
   if ((room_max - room_min).maxCoeff() > 200) bad("[world] room_max", "room larger than 200 units");
   if (!(room_min.array() + min_clearance < 0).all() || !(room_max.array() - min_clearance > 0).all())
@@ -454,6 +461,8 @@ std::string TScenario::toIni() const
   kv("colour", colour ? "true" : "false", "also render colour (tinted faces); grey = its luminance");
   kv("texels_per_unit", fmt(texels_per_unit), "texture resolution");
   kv("shapes_per_unit2", fmt(shapes_per_unit2), "density of the texture shapes (per square unit)");
+  kv("object_shapes_per_unit2", fmt(object_shapes_per_unit2), "the same on the moving objects");
+  kv("object_texels_per_unit", fmt(object_texels_per_unit), "texture resolution of the moving objects");
   o << "\n[world]\n";
   kv("room_min", v3(room_min), "room corners in W (the floor is y = room_max.y)");
   kv("room_max", v3(room_max), "");

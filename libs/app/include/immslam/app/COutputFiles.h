@@ -33,7 +33,7 @@ class COutputFiles
  private:
   std::string m_dir;
   std::ofstream m_trajFile;
-  std::unique_ptr<io::CCsvWriter> m_probs, m_stats, m_searches, m_classes, m_tracks;
+  std::unique_ptr<io::CCsvWriter> m_probs, m_stats, m_searches, m_classes, m_tracks, m_shadowLog;
   eval::TTrajectory m_traj;
 };
 }  // namespace immslam::app

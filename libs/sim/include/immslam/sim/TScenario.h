@@ -86,6 +86,11 @@ struct TScenario
   double texels_per_unit = 100.0;
   /** Density of the procedural texture shapes (per square unit of surface). */
   double shapes_per_unit2 = 16.0;
+  /** The same for the moving objects: small and close to the camera, they need a denser texture to
+   * show as many trackable corners per image area as the room does. */
+  double object_shapes_per_unit2 = 96.0;
+  /** Texture resolution of the moving objects (texels per unit length): they are seen close up. */
+  double object_texels_per_unit = 400.0;
 
   // ---- [world]
   /** The room: an axis-aligned box in W (its six inner faces are textured). */
