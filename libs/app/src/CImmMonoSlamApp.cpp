@@ -1,6 +1,9 @@
 /* imm-monoslam — command line and configuration of the main application. */
 #include <immslam/app/CImmMonoSlamApp.h>
 
+#include <immslam/app/app_options.h>
+#include <immslam/system/CMonoSlamSystem.h>
+
 #include <mrpt/config/CConfigFile.h>
 
 #include <filesystem>
@@ -37,8 +40,22 @@ std::string CImmMonoSlamApp::usage()
          "  --set SECTION.KEY=VALUE override one config key (repeatable)\n"
          "  --no-gui                never open a window\n"
          "  --quiet                 no progress line\n"
+         "  --print-config          print the effective configuration (every key, with comments) and exit\n"
          "  --help, --version\n"
          "Exit status: 0 success, 1 bad input or failure, 2 bad usage.\n";
+}
+
+std::string CImmMonoSlamApp::effectiveConfigText() const
+{
+  mrpt::config::CConfigFileMemory eff;
+  TInputOptions in;
+  TOutputOptions out;
+  in.loadFromConfigFile(m_cfg, "input");
+  out.loadFromConfigFile(m_cfg, "output");
+  in.saveToConfigFile(eff, "input");
+  out.saveToConfigFile(eff, "output");
+  system::CMonoSlamSystem::effectiveConfig(m_cfg, eff);
+  return eff.getContent();
 }
 
 int CImmMonoSlamApp::initialize(int argc, const char* const* argv)
@@ -114,6 +131,8 @@ int CImmMonoSlamApp::initialize(const std::vector<std::string>& args)
       m_args.noGui = true;
     else if (a == "--quiet")
       m_args.quiet = true;
+    else if (a == "--print-config")
+      m_args.printConfig = true;
     else if (a.size() > 1 && a[0] == '-')
     {
       std::cerr << "imm-monoslam: unknown option '" << a << "'\n" << usage();
@@ -157,6 +176,19 @@ int CImmMonoSlamApp::initialize(const std::vector<std::string>& args)
       return 2;
     }
     m_cfg.write(s.substr(0, dot), s.substr(dot + 1, eq - dot - 1), s.substr(eq + 1));
+  }
+  if (m_args.printConfig)
+  {
+    try
+    {
+      std::cout << effectiveConfigText();
+    }
+    catch (const std::exception& e)
+    {
+      std::cerr << "imm-monoslam: " << m_args.config << ": " << e.what() << "\n";
+      return 1;
+    }
+    return 0;
   }
   return -1;
 }

@@ -107,8 +107,10 @@ void CVisualOutputs::onFrame(std::size_t frameIndex, const cv::Mat& image, const
   if (m_opts.scene_every_n > 0 && frameIndex % static_cast<std::size_t>(m_opts.scene_every_n) == 0)
   {
     char name[64];
-    std::snprintf(name, sizeof name, "scene_%06zu.3Dscene", frameIndex);
-    viz::saveSceneFile(*viz::buildScene(sceneContent(slam, trajectory, name)), (fs::path(m_dir) / name).string());
+    std::snprintf(name, sizeof name, "scene_%06zu", frameIndex);
+    const auto scene = viz::buildScene(sceneContent(slam, trajectory, name));
+    viz::saveSceneFile(*scene, (fs::path(m_dir) / (std::string(name) + ".3Dscene")).string());
+    viz::renderScenePng(*scene, (fs::path(m_dir) / (std::string(name) + ".png")).string(), 800, 600);
   }
 }
 

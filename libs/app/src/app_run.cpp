@@ -211,15 +211,12 @@ int CImmMonoSlamApp::runImpl()
   std::vector<std::string> labels;
   {
     // The effective configuration, printed and saved with every run.
-    mrpt::config::CConfigFileMemory eff;
-    inOpts.saveToConfigFile(eff, "input");
-    outOpts.saveToConfigFile(eff, "output");
-    sys->saveEffectiveConfig(eff);
+    const std::string eff = effectiveConfigText();
     std::ofstream f(out.path("config_effective.ini"));
     f << "# Effective configuration of this run (" << version() << ")\n# config: " << m_args.config << "\n# camera: "
       << cam->toCalibLine() << "\n"
-      << eff.getContent();
-    if (!m_args.quiet) logStr(mrpt::system::LVL_DEBUG, "effective configuration:\n" + eff.getContent());
+      << eff;
+    if (!m_args.quiet) logStr(mrpt::system::LVL_DEBUG, "effective configuration:\n" + eff);
   }
 
   // ---- Frames

@@ -158,13 +158,23 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
   return m_frame;
 }
 
-void CMonoSlamSystem::saveEffectiveConfig(mrpt::config::CConfigFileBase& cfg) const
+void CMonoSlamSystem::effectiveConfig(const mrpt::config::CConfigFileBase& cfg, mrpt::config::CConfigFileBase& out)
 {
-  m_opts.saveToConfigFile(cfg, "system");
-  m_slamOpts.saveToConfigFile(cfg, "slam");
-  m_bankOpts.saveToConfigFile(cfg, "imm");
-  m_ransacOpts.saveToConfigFile(cfg, "ransac");
-  m_shadowOpts.saveToConfigFile(cfg, "shadow");
+  TOptions o;
+  slam::CMonoSlamIMM::TOptions so;
+  slam::TIMMBankOptions bo;
+  slam::COnePointRansac::TOptions ro;
+  shadow::CShadowFilter::TOptions sh;
+  o.loadFromConfigFile(cfg, "system");
+  so.loadFromConfigFile(cfg, "slam");
+  bo.loadFromConfigFile(cfg, "imm");
+  ro.loadFromConfigFile(cfg, "ransac");
+  sh.loadFromConfigFile(cfg, "shadow");
+  o.saveToConfigFile(out, "system");
+  so.saveToConfigFile(out, "slam");
+  bo.saveToConfigFile(out, "imm");
+  ro.saveToConfigFile(out, "ransac");
+  sh.saveToConfigFile(out, "shadow");
 }
 
 std::map<std::string, std::set<std::string>> CMonoSlamSystem::knownKeys()

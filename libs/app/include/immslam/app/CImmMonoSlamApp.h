@@ -27,6 +27,7 @@ struct TAppArguments
   long long maxFrames = -1;        ///< --frames N
   bool noGui = false;
   bool quiet = false;
+  bool printConfig = false;        ///< --print-config
   std::vector<std::string> sets;   ///< --set SECTION.KEY=VALUE
 };
 
@@ -65,6 +66,9 @@ class CImmMonoSlamApp : public mrpt::system::COutputLogger
   mrpt::config::CConfigFileMemory& config() { return m_cfg; }
   const TAppArguments& arguments() const { return m_args; }
   const TRunSummary& summary() const { return m_summary; }
+
+  /** Every option of every section (defaults where the config is silent), with comments. */
+  std::string effectiveConfigText() const;
 
   static std::string usage();
   static std::string version();

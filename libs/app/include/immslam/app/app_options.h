@@ -26,7 +26,7 @@ struct TInputOptions : public mrpt::config::CLoadableOptions
 struct TOutputOptions : public mrpt::config::CLoadableOptions
 {
   bool scene = true;        ///< write scene.3Dscene at the end
-  int scene_every_n = 0;    ///< also scene_NNNNNN.3Dscene every N frames (0: never)
+  int scene_every_n = 0;    ///< also scene_NNNNNN.3Dscene (+ .png snapshot) every N frames (0: never)
   bool overlays = false;    ///< write overlay images (search ellipses, matches, classes)
   int overlay_every_n = 1;  ///< every N frames
   bool overlay_video = false;  ///< also overlays.avi

@@ -69,8 +69,9 @@ class CMonoSlamSystem
   const shadow::CShadowFilter* shadowFilter() const { return m_shadow.get(); }
   const TOptions& options() const { return m_opts; }
 
-  /** Writes every effective option of the system (all sections) into cfg. */
-  void saveEffectiveConfig(mrpt::config::CConfigFileBase& cfg) const;
+  /** Loads every section's options from cfg (defaults where absent) and writes them, with their
+   * comments, into out: the effective configuration without building the system. */
+  static void effectiveConfig(const mrpt::config::CConfigFileBase& cfg, mrpt::config::CConfigFileBase& out);
   /** Keys known per section (for the unknown-key check of the application). */
   static std::map<std::string, std::set<std::string>> knownKeys();
 

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Regenerates doc/configuration.md from the options classes themselves (imm-monoslam --print-config):
+# every key of every section, its default and its comment.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+BIN=${1:-build/bin/imm-monoslam}
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+printf '[input]\n' > "$TMP/empty.ini"
+{
+  echo "# Configuration reference"
+  echo
+  echo "Generated from the options classes by \`share/scripts/gen-config-doc.sh\` (\`imm-monoslam CONFIG --print-config\`"
+  echo "prints the same for any config, with its values). Every key is optional; unknown keys and sections are"
+  echo "errors that name them (with the closest known key). Override any key on the command line with"
+  echo "\`--set SECTION.KEY=VALUE\`. Noise values are in pixels (the dimensionless formulation, doc/conventions.md)."
+  echo
+  echo "The camera is not a section of the shipped configs: it comes from the input (calib.txt, the rawlog's"
+  echo "\`cameraParams\`) or \`--calib FILE\`. A \`[camera]\` section (MRPT \`[CAMERA_PARAMS]\` keys: \`resolution\`, \`cx\`,"
+  echo "\`cy\`, \`fx\`, \`fy\`, \`dist\`, \`distortion_model\`; or \`model = pinhole|opencv|davison\` with \`kd1\`; or"
+  echo "\`calib_file = path\`) is used for live cameras. Precedence: \`--calib\` > \`[camera]\` > the input's own."
+  "$BIN" "$TMP/empty.ini" --print-config | awk '
+    /^\[/ { sec=$0; gsub(/[\[\]]/, "", sec); printf "\n## [%s]\n\n| key | default | meaning |\n|---|---|---|\n", sec; next }
+    /=/ {
+      key=$1; line=$0; sub(/^[^=]*=[ ]*/, "", line);
+      com=""; if (index(line, "//")) { com=substr(line, index(line, "//")+2); line=substr(line, 1, index(line, "//")-1) }
+      gsub(/[ ]+$/, "", line); gsub(/^[ ]+/, "", com); gsub(/\|/, "\\|", com); gsub(/\|/, "\\|", line)
+      printf "| `%s` | `%s` | %s |\n", key, line, com
+    }'
+} > doc/configuration.md
+echo "wrote doc/configuration.md"
