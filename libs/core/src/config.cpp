@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -45,17 +47,15 @@ bool rawValue(const mrpt::config::CConfigFileBase& c, const std::string& section
 
 double parseNumber(const std::string& section, const std::string& key, const std::string& v)
 {
-  std::size_t pos = 0;
+  // std::from_chars: the whole text as a decimal number, whatever the process locale (std::stod
+  // follows LC_NUMERIC, so "0.5" would not parse under a decimal-comma locale, and it accepted hex).
+  const char* b = v.data();
+  const char* e = v.data() + v.size();
+  if (b != e && *b == '+' && (e - b) > 1 && b[1] != '-') ++b;
   double d = 0;
-  try
-  {
-    d = std::stod(v, &pos);
-  }
-  catch (const std::exception&)
-  {
-    bad(section, key, v, "not a number");
-  }
-  if (pos != v.size()) bad(section, key, v, "not a number");
+  const auto res = std::from_chars(b, e, d, std::chars_format::general);
+  if (res.ec == std::errc::result_out_of_range && res.ptr == e) bad(section, key, v, "out of the range of a double");
+  if (res.ec != std::errc() || res.ptr != e || v.empty()) bad(section, key, v, "not a number");
   if (std::isnan(d)) bad(section, key, v, "NaN is not allowed");
   return d;
 }
@@ -155,6 +155,51 @@ void checkKnownKeys(const mrpt::config::CConfigFileBase& c, const std::string& s
     if (bestD <= 3) err << " (did you mean '" << best << "'?)";
   }
   if (nBad) throw std::runtime_error(err.str());
+}
+
+void checkIniSyntax(const std::string& text, const std::string& origin)
+{
+  std::istringstream in(text);
+  std::string raw, section;
+  bool inSection = false;
+  std::map<std::string, std::size_t> seen;  // keys of the current section -> line
+  for (std::size_t lineNo = 1; std::getline(in, raw); ++lineNo)
+  {
+    const std::string line = trim(raw);
+    const auto where = [&] { return origin + ":" + std::to_string(lineNo) + ": "; };
+    const auto shown = [&] {
+      std::string t = line.size() > 60 ? line.substr(0, 60) + "..." : line;
+      for (char& ch : t)
+        if (static_cast<unsigned char>(ch) < 32 || static_cast<unsigned char>(ch) > 126) ch = '?';
+      return "'" + t + "'";
+    };
+    if (line.empty() || line[0] == '#' || line[0] == ';' || line.rfind("//", 0) == 0 || line[0] == '@') continue;
+    if (line[0] == '[')
+    {
+      const auto close = line.find(']');
+      const std::string rest = close == std::string::npos ? std::string() : trim(line.substr(close + 1));
+      if (close == std::string::npos || trim(line.substr(1, close - 1)).empty() ||
+          !(rest.empty() || rest[0] == '#' || rest[0] == ';' || rest.rfind("//", 0) == 0))
+        throw std::runtime_error(where() + "malformed section header " + shown() + " (expected [name])");
+      section = trim(line.substr(1, close - 1));
+      inSection = true;
+      seen.clear();
+      continue;
+    }
+    const auto eq = line.find('=');
+    if (eq == std::string::npos)
+      throw std::runtime_error(where() + shown() + " is not 'key = value' (missing '='?)");
+    const std::string key = trim(line.substr(0, eq));
+    if (key.empty()) throw std::runtime_error(where() + shown() + ": no key before '='");
+    if (key.find_first_of(" \t[]") != std::string::npos)
+      throw std::runtime_error(where() + "malformed key '" + key + "' in " + shown());
+    if (!inSection)
+      throw std::runtime_error(where() + "key '" + key + "' outside any [section]");
+    const auto [it, fresh] = seen.emplace(key, lineNo);
+    if (!fresh)
+      throw std::runtime_error(where() + "[" + section + "] " + key + " given twice (also on line " +
+                               std::to_string(it->second) + ")");
+  }
 }
 
 void requirePositive(double v, const std::string& section, const std::string& key)

@@ -3,6 +3,12 @@
 #include <immslam/core/config.h>
 #include <mrpt/config/CConfigFileMemory.h>
 
+#include <clocale>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
 using namespace immslam;
 
 namespace
@@ -84,4 +90,69 @@ TEST(Config, UnknownKeysAreNamedWithAHint)
   EXPECT_NE(err.find("foo"), std::string::npos) << err;
   EXPECT_EQ(err.find("max_features"), std::string::npos) << err;
   EXPECT_NO_THROW(core::checkKnownKeys(c, "absent", known));
+}
+
+TEST(Config, NumbersAreDecimalWhateverTheLocale)
+{
+  TDemoOptions o;
+  o.loadFromConfigFile(mrpt::config::CConfigFileMemory("[slam]\nsigma_pixel = +2.5e-1\n"), "slam");
+  EXPECT_EQ(o.sigma_pixel, 0.25);
+  for (const char* v : {"0x10", "1.5.2", "--1", "+-1", "1e400", "2,5", ""})
+  {
+    const auto err = errorOf([&] {
+      o.loadFromConfigFile(mrpt::config::CConfigFileMemory(std::string("[slam]\nsigma_pixel = ") + v + "x\n"), "slam");
+    });
+    EXPECT_NE(err.find("[slam] sigma_pixel"), std::string::npos) << v << ": " << err;
+  }
+  EXPECT_NE(errorOf([&] { o.loadFromConfigFile(mrpt::config::CConfigFileMemory("[slam]\nsigma_pixel = 1e400\n"), "slam"); })
+                .find("out of the range"),
+            std::string::npos);
+  // A decimal-comma locale must not change how "0.5" reads (std::stod would stop at the '.').
+  const std::string old = std::setlocale(LC_NUMERIC, nullptr);
+  if (std::setlocale(LC_NUMERIC, "de_DE.UTF-8") || std::setlocale(LC_NUMERIC, "fr_FR.UTF-8"))
+  {
+    o.loadFromConfigFile(mrpt::config::CConfigFileMemory("[slam]\nsigma_pixel = 0.5\n"), "slam");
+    EXPECT_EQ(o.sigma_pixel, 0.5);
+    std::setlocale(LC_NUMERIC, old.c_str());
+  }
+}
+
+TEST(Config, IniSyntaxErrorsNameTheLine)
+{
+  EXPECT_NO_THROW(core::checkIniSyntax("# c\n; c\n// c\n@define X 1\n\n[a]  # c\nk = v = w\n k2=  \n[b]\nk = 1\n", "f.ini"));
+  const std::vector<std::pair<std::string, std::string>> bad{
+      {"[slam]\nsigma_pixel 2\n", "f.ini:2: 'sigma_pixel 2' is not 'key = value'"},
+      {"sigma_pixel = 2\n[slam]\n", "f.ini:1: key 'sigma_pixel' outside any [section]"},
+      {"[slam]\n= 2\n", "f.ini:2: '= 2': no key"},
+      {"[slam\nk = 1\n", "f.ini:1: malformed section header"},
+      {"[]\n", "f.ini:1: malformed section header"},
+      {"[a] b\n", "f.ini:1: malformed section header"},
+      {"[slam]\nk = 1\n\nk = 2\n", "f.ini:4: [slam] k given twice (also on line 2)"},
+      {"[slam]\nmy key = 1\n", "f.ini:2: malformed key 'my key'"},
+      {"[slam]\n\x01\xff\n", "f.ini:2: '?" "?' is not"},
+  };
+  for (const auto& [text, what] : bad)
+  {
+    const auto err = errorOf([&] { core::checkIniSyntax(text, "f.ini"); });
+    EXPECT_NE(err.find(what), std::string::npos) << "'" << text << "' gave: " << err;
+  }
+  // The same key in two sections is fine.
+  EXPECT_NO_THROW(core::checkIniSyntax("[a]\nk = 1\n[b]\nk = 1\n", "f.ini"));
+}
+
+TEST(Config, ShippedConfigsHaveCleanSyntax)
+{
+  namespace fs = std::filesystem;
+  int n = 0;
+  for (const auto* dir : {"/ini", "/ini/scenarios"})
+    for (const auto& e : fs::directory_iterator(std::string(IMMSLAM_SOURCE_DIR) + dir))
+      if (e.path().extension() == ".ini")
+      {
+        std::ifstream f(e.path());
+        std::stringstream ss;
+        ss << f.rdbuf();
+        EXPECT_NO_THROW(core::checkIniSyntax(ss.str(), e.path().string())) << e.path();
+        ++n;
+      }
+  EXPECT_GE(n, 2);
 }

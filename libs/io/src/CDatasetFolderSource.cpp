@@ -76,6 +76,8 @@ CDatasetFolderSource::CDatasetFolderSource(const std::string& folder) : m_folder
   if (!in) throw std::runtime_error("cannot open " + m_rgbTxt + " (every dataset folder needs one)");
   m_entries = parseRgbTxt(in, m_rgbTxt);
   if (in.bad()) throw std::runtime_error("read error in " + m_rgbTxt);
+  if (m_entries.empty())
+    throw std::runtime_error(m_rgbTxt + ": no frame listed (the file is empty or holds only comments)");
 
   const std::string calib = (fs::path(folder) / "calib.txt").string();
   if (fs::exists(calib, ec)) m_calib = camera::loadCalibFile(calib);

@@ -17,6 +17,7 @@
 
 #include <deque>
 #include <filesystem>
+#include <map>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -106,6 +107,8 @@ struct CRawlogSource::Impl
   // First-pass results.
   std::size_t firstPassEntries = 0;
   std::size_t items = 0;
+  std::size_t images = 0;                          ///< CObservationImage items
+  std::map<std::string, std::size_t> otherClasses;  ///< other items by class (ground truth excluded)
   bool sensoryFrames = false;
   std::string damage;  ///< empty: clean end
   camera::CCameraModel::Ptr calib;
@@ -174,7 +177,7 @@ struct CRawlogSource::Impl
       {
         if (r.entries() == 0 && items == 0)
           throw std::runtime_error("cannot read rawlog " + path + " (not an MRPT rawlog?): " + why);
-        damage = "rawlog truncated/corrupt after entry " + std::to_string(r.entries()) + ": " + why;
+        damage = damageReport(r.entries(), why);
         break;
       }
       its.clear();
@@ -187,8 +190,12 @@ struct CRawlogSource::Impl
           continue;
         }
         ++items;
-        if (calib || !it.obs) continue;
-        if (auto img = std::dynamic_pointer_cast<mrpt::obs::CObservationImage>(it.obs))
+        const auto img = std::dynamic_pointer_cast<mrpt::obs::CObservationImage>(it.obs);
+        if (img)
+          ++images;
+        else
+          ++otherClasses[it.className];
+        if (calib || !img) continue;
         {
           camErr.clear();
           calib = cameraOf(img->cameraParams, &camErr);
@@ -198,6 +205,31 @@ struct CRawlogSource::Impl
       }
     }
     firstPassEntries = r.entries();
+  }
+
+  /** The damage report of next()/damage(): names the file and the last complete entry. */
+  std::string damageReport(std::size_t entries, const std::string& why) const
+  {
+    return "rawlog truncated/corrupt after entry " + std::to_string(entries) + " of " + path + ": " + why;
+  }
+
+  /** An input without a single image is an error (not an empty run): names the file and what it holds. */
+  void requireImages() const
+  {
+    if (images > 0) return;
+    std::string what;
+    if (firstPassEntries == 0)
+      what = "is empty (no object)";
+    else
+    {
+      what = "holds no image observation (mrpt::obs::CObservationImage); it holds";
+      std::string list;
+      for (const auto& [cls, n] : otherClasses) list += (list.empty() ? " " : ", ") + std::to_string(n) + " " + cls;
+      if (!gt.empty()) list += (list.empty() ? " " : ", ") + std::to_string(gt.size()) + " ground-truth poses";
+      what += list.empty() ? " nothing usable" : list;
+    }
+    if (!damage.empty()) what += " (then: " + damage + ")";
+    throw std::runtime_error("rawlog " + path + " " + what + ": nothing to process");
   }
 };
 
@@ -222,6 +254,7 @@ CRawlogSource::CRawlogSource(const std::string& path) : m_impl(std::make_unique<
     }
   }
   m.firstPass();
+  m.requireImages();
   // For MRPT code that loads the same observations' external images (process-wide setting).
   mrpt::img::CImage::setImagesPathBase(m.imagesDir);
   m.lastTCam.reset();
@@ -265,8 +298,7 @@ ENextStatus CRawlogSource::next(TFrame& frame, std::string& why)
         }
         m.ended = true;
         if (res == detail::CRawlogReader::EResult::Damage)
-          m.endWhy =
-              "rawlog truncated/corrupt after entry " + std::to_string(m.reader->entries()) + ": " + err;
+          m.endWhy = m.damageReport(m.reader->entries(), err);
         m.reader.reset();  // releases the file
       }
       it = std::move(m.pending.front());

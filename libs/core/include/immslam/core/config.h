@@ -33,6 +33,16 @@ std::set<std::string> knownKeys(const mrpt::config::CLoadableOptions& opts, cons
  * (with the closest known key as a hint). No-op if the section does not exist. */
 void checkKnownKeys(const mrpt::config::CConfigFileBase& c, const std::string& section, const std::set<std::string>& known);
 
+/** Checks the syntax of ini text before it is handed to MRPT's parser, which silently drops what it
+ * cannot parse (a line `sigma_pixel 2` without '=', a key before the first section, `= 2`), so that
+ * a mistyped line is an error instead of a default value. Accepted lines: blank; comments (first
+ * non-blank characters `#`, `;` or `//`); `[section]` (optionally followed by a comment); MRPT
+ * preprocessor lines (`@define ...`, first non-blank character `@`); `key = value` inside a section,
+ * each key at most once per section (MRPT keeps only one of them).
+ * \param origin the file name used in errors: "origin:LINE: ...".
+ * \throws std::runtime_error naming origin:line and the offending text (the first problem only). */
+void checkIniSyntax(const std::string& text, const std::string& origin);
+
 /** Value checks with errors naming section.key. */
 void requirePositive(double v, const std::string& section, const std::string& key);
 void requireNonNegative(double v, const std::string& section, const std::string& key);

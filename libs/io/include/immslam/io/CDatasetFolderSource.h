@@ -38,8 +38,9 @@ class CDatasetFolderSource : public CImageSource
 {
  public:
   /** Opens `folder`.
-   * \throws std::runtime_error naming the path if the folder or its rgb.txt cannot be read, or if
-   * calib.txt / groundtruth.txt exist but are malformed (their loaders name file and line). */
+   * \throws std::runtime_error naming the path if the folder or its rgb.txt cannot be read, if
+   * rgb.txt lists no frame (empty or only comments: an empty input is an error, not an empty run),
+   * or if calib.txt / groundtruth.txt exist but are malformed (their loaders name file and line). */
   explicit CDatasetFolderSource(const std::string& folder);
 
   ENextStatus next(TFrame& frame, std::string& why) override;

@@ -27,9 +27,9 @@ namespace immslam::io
  * Construction makes a quick first pass over the file (external images are not loaded; embedded
  * images are decompressed) to collect the ground truth, count the items (sizeHint(): the number
  * of next() results before End) and take the first usable calibration. A truncated or corrupt file
- * ends the stream cleanly: next() returns End with why = "rawlog truncated/corrupt after entry N:
- * <details>" at the same place in both passes (N = number of complete top-level objects). A gzip
- * stream cut exactly between two objects is recognised by its missing trailer.
+ * ends the stream cleanly: next() returns End with why = "rawlog truncated/corrupt after entry N of
+ * <path>: <details>" at the same place in both passes (N = number of complete top-level objects).
+ * A gzip stream cut exactly between two objects is recognised by its missing trailer.
  *
  * External images: a relative file name is resolved against, in order, the MRPT convention
  * `<rawlog dir>/<rawlog name without extension>_Images` (also `_images`, `_IMAGES`, then
@@ -45,8 +45,9 @@ class CRawlogSource : public CImageSource
 {
  public:
   /** Opens `path` and makes the first pass.
-   * \throws std::runtime_error naming the path if the file cannot be opened or its very first
-   * object cannot be read (not a rawlog). */
+   * \throws std::runtime_error naming the path if the file cannot be opened, its very first
+   * object cannot be read (not a rawlog), or it holds no CObservationImage at all (an empty file,
+   * or only other observations / ground truth: the message lists what it holds). */
   explicit CRawlogSource(const std::string& path);
   ~CRawlogSource() override;
   CRawlogSource(const CRawlogSource&) = delete;
