@@ -20,6 +20,36 @@ struct TBlockJac
   Eigen::Matrix<double, 7, 7> D;
   Eigen::Matrix<double, 7, 6> G;
 };
+/** Rows of one block of M = A P~: M_b = D_b P~_b + G_b P~_u (S = block size). */
+template <int S>
+void rowBlock(const TBlockJac& b, const MatX& P, const Eigen::Ref<const MatX>& Pu, MatX& M)
+{
+  const Eigen::Matrix<double, S, S> D = b.D.topLeftCorner<S, S>();
+  auto Mb = M.middleRows<S>(b.off);
+  if (b.hasG)
+  {
+    const Eigen::Matrix<double, S, 6> G = b.G.topRows<S>();
+    for (Eigen::Index c = 0; c < P.cols(); ++c)
+      Mb.col(c).noalias() = D * P.col(c).segment<S>(b.off) + G * Pu.col(c);
+  }
+  else
+    for (Eigen::Index c = 0; c < P.cols(); ++c) Mb.col(c).noalias() = D * P.col(c).segment<S>(b.off);
+}
+
+/** Columns of one block of P' = M A^T, rows from the block down (lower triangle). */
+template <int S>
+void colBlock(const TBlockJac& b, const MatX& M, MatX& P)
+{
+  const Eigen::Index n = M.rows(), h = n - b.off;
+  const Eigen::Matrix<double, S, S> Dt = b.D.topLeftCorner<S, S>().transpose();
+  auto Pc = P.block(b.off, b.off, h, S);
+  Pc.noalias() = M.block(b.off, b.off, h, S).lazyProduct(Dt);
+  if (b.hasG)
+  {
+    const Eigen::Matrix<double, 6, S> Gt = b.G.topRows<S>().transpose();
+    Pc.noalias() += M.block(b.off, kU, h, 6).lazyProduct(Gt);
+  }
+}
 }  // namespace
 
 void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& features,
@@ -135,21 +165,26 @@ void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& featur
   // The impulses act like a perturbation of u: P~ = P + E N E^T.
   g.P.block<6, 6>(kU, kU) += inc.noiseCov;
   // M = A P~ (row blocks), then P' = M A^T, lower triangle only (column blocks), then mirrored.
+  // Fixed-size kernels per block size: tiny dynamic products would go through GEMM packing.
   scratch.resize(n, n);
   const auto Pu = g.P.middleRows<6>(kU);
   for (const auto& b : blocks)
   {
-    auto Mb = scratch.middleRows(b.off, b.len);
-    Mb.noalias() = b.D.topLeftCorner(b.len, b.len) * g.P.middleRows(b.off, b.len);
-    if (b.hasG) Mb.noalias() += b.G.topRows(b.len) * Pu;
+    switch (b.len)
+    {
+      case 3: rowBlock<3>(b, g.P, Pu, scratch); break;
+      case 6: rowBlock<6>(b, g.P, Pu, scratch); break;
+      default: rowBlock<7>(b, g.P, Pu, scratch); break;
+    }
   }
   for (const auto& b : blocks)
   {
-    // Rows from b.off down: P'[r, b] = M[r, b] D_b^T + M[r, u] G_b^T.
-    const Eigen::Index h = n - b.off;
-    auto Pc = g.P.block(b.off, b.off, h, b.len);
-    Pc.noalias() = scratch.block(b.off, b.off, h, b.len) * b.D.topLeftCorner(b.len, b.len).transpose();
-    if (b.hasG) Pc.noalias() += scratch.block(b.off, kU, h, 6) * b.G.topRows(b.len).transpose();
+    switch (b.len)
+    {
+      case 3: colBlock<3>(b, scratch, g.P); break;
+      case 6: colBlock<6>(b, scratch, g.P); break;
+      default: colBlock<7>(b, scratch, g.P); break;
+    }
   }
   g.P.triangularView<Eigen::StrictlyUpper>() = g.P.transpose();
 }
