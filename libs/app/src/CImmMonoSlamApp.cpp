@@ -2,6 +2,7 @@
 #include <immslam/app/CImmMonoSlamApp.h>
 
 #include <immslam/app/app_options.h>
+#include <immslam/io/CLiveCameraSource.h>
 #include <immslam/system/CMonoSlamSystem.h>
 
 #include <mrpt/config/CConfigFile.h>
@@ -43,6 +44,12 @@ std::string CImmMonoSlamApp::usage()
          "  --print-config          print the effective configuration (every key, with comments) and exit\n"
          "  --help, --version\n"
          "Exit status: 0 success, 1 bad input or failure, 2 bad usage.\n";
+}
+
+void CImmMonoSlamApp::requestStop()
+{
+  m_stop = true;
+  if (io::CLiveCameraSource* live = m_live.load()) live->requestStop();
 }
 
 std::string CImmMonoSlamApp::effectiveConfigText() const

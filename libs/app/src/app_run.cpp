@@ -155,6 +155,13 @@ int CImmMonoSlamApp::runImpl()
 
   // ---- Input: INPUT, --live, or the config's [input] source.
   io::CImageSource::Ptr source;
+  // The live source is published to requestStop() while it exists: the guard, declared after the
+  // source, clears it before the source is destroyed, on every way out.
+  struct TLiveGuard
+  {
+    std::atomic<io::CLiveCameraSource*>& p;
+    ~TLiveGuard() { p = nullptr; }
+  } liveGuard{m_live};
   std::shared_ptr<io::CRawlogRecorder> recorder;
   std::string inputPath = m_args.input;
   if (!m_args.live.empty())
@@ -164,6 +171,8 @@ int CImmMonoSlamApp::runImpl()
     lo.frameRateHz = inOpts.live_frame_rate_hz;
     lo.camera = cam;
     auto live = std::make_unique<io::CLiveCameraSource>(ini, section, lo);
+    m_live = live.get();
+    if (m_stop) live->requestStop();
     if (!m_args.record.empty())
     {
       recorder = std::make_shared<io::CRawlogRecorder>(m_args.record);
@@ -345,12 +354,25 @@ int CImmMonoSlamApp::runImpl()
     << "; map " << m_summary.finalMapSize << " features; median matched " << std::setprecision(0)
     << m_summary.medianMatched;
   if (m_summary.ate)
-    s << std::setprecision(4) << "; ATE (Sim3) " << m_summary.ate->rmse << " = " << std::setprecision(2)
-      << 100 * m_summary.ate->rmseOverPath << " % of path, " << 100 * m_summary.ate->rmseOverExtent
-      << " % of extent (" << m_summary.ate->nPairs << " poses)";
+  {
+    s << std::setprecision(4) << "; ATE (Sim3) " << m_summary.ate->rmse;
+    if (m_summary.ate->pathLength > 0)
+      s << " = " << std::setprecision(2) << 100 * m_summary.ate->rmseOverPath << " % of path, "
+        << 100 * m_summary.ate->rmseOverExtent << " % of extent";
+    else
+      s << " (the ground-truth camera did not move)";
+    s << " (" << m_summary.ate->nPairs << " poses)";
+  }
   if (!m_summary.endReason.empty()) s << "; ended: " << m_summary.endReason;
   s << "; outputs in " << m_args.outDir;
   std::cout << s.str() << std::endl;
+  if (m_summary.framesProcessed == 0)
+  {
+    std::cerr << "imm-monoslam: error: no usable frame in the input (" << m_summary.framesRead << " read, "
+              << m_summary.framesSkipped << " skipped"
+              << (m_summary.skipReasons.empty() ? std::string() : "; first: " + m_summary.skipReasons[0]) << ")\n";
+    return 1;
+  }
   return 0;
 }
 }  // namespace immslam::app

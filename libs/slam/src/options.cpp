@@ -172,9 +172,18 @@ std::vector<motion::TMotionModel> TIMMBankOptions::parseModels() const
       for (std::size_t i = 1; i < parts.size(); ++i)
       {
         std::size_t pos = 0;
-        sig.push_back(std::stod(parts[i], &pos));
-        if (pos != parts[i].size() || !(sig.back() > 0) || !std::isfinite(sig.back()))
-          throw std::invalid_argument("noise must be a number > 0");
+        double v = 0;
+        try
+        {
+          v = std::stod(parts[i], &pos);
+        }
+        catch (const std::exception&)
+        {
+          pos = 0;
+        }
+        if (pos == 0 || pos != parts[i].size() || !(v > 0) || !std::isfinite(v))
+          throw std::invalid_argument("noise '" + parts[i] + "' is not a number > 0");
+        sig.push_back(v);
       }
       if (m.family == motion::EMotionFamily::Stationary && sig.size() > 1)
         throw std::invalid_argument("stationary takes at most one value (angular jitter)");

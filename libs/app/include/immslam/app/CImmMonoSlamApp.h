@@ -13,6 +13,11 @@
 #include <string>
 #include <vector>
 
+namespace immslam::io
+{
+class CLiveCameraSource;
+}
+
 namespace immslam::app
 {
 /** Parsed command line. */
@@ -59,8 +64,9 @@ class CImmMonoSlamApp : public mrpt::system::COutputLogger
    * (the message names the file, key or frame). Never throws. Outputs written so far are kept. */
   int run();
 
-  /** Asks a running run() to stop after the current frame (thread- and signal-safe). */
-  void requestStop() { m_stop = true; }
+  /** Asks a running run() to stop after the current frame (thread- and signal-safe; a live camera
+   * waiting for a frame is told to stop too). */
+  void requestStop();
 
   /** The loaded configuration (after --set); tests may change keys before run(). */
   mrpt::config::CConfigFileMemory& config() { return m_cfg; }
@@ -81,5 +87,6 @@ class CImmMonoSlamApp : public mrpt::system::COutputLogger
   std::string m_configDir;
   TRunSummary m_summary;
   std::atomic<bool> m_stop{false};
+  std::atomic<io::CLiveCameraSource*> m_live{nullptr};  ///< the live source while run() uses one
 };
 }  // namespace immslam::app
