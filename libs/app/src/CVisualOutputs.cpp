@@ -5,6 +5,7 @@
 #include <immslam/viz/plots.h>
 #include <immslam/viz/scene_render.h>
 
+#include <Eigen/Geometry>
 #include <cstdio>
 #include <filesystem>
 
@@ -12,9 +13,11 @@ namespace immslam::app
 {
 namespace fs = std::filesystem;
 
-CVisualOutputs::CVisualOutputs(const std::string& outDir, const TOutputOptions& opts, const slam::CMonoSlamIMM& slam)
+CVisualOutputs::CVisualOutputs(const std::string& outDir, const TOutputOptions& opts, const slam::CMonoSlamIMM& slam,
+                               bool liveWindows)
     : m_dir(outDir), m_opts(opts)
 {
+  if (liveWindows) m_live = std::make_unique<CLiveView>();
   for (const auto& m : slam.models()) m_modelNames.push_back(m.name);
   if (m_opts.overlays || m_opts.overlay_video)
   {
@@ -47,8 +50,20 @@ viz::TSceneContent CVisualOutputs::sceneContent(const slam::CMonoSlamIMM& slam, 
     if (e.inverseDepth) p.inverseDepth = viz::TInverseDepthView{e.anchor_W, e.theta, e.phi, e.rho, e.cov_tpr};
     c.points.push_back(p);
   }
+  // Tracks: the positions within the region of the map (twice its size around it); a track point at
+  // an unresolved depth would drag the view far away.
+  Eigen::AlignedBox3d box;
+  for (const auto& p : c.trajectory) box.extend(p.p_W_C);
+  for (const auto& p : c.points)
+    if (p.depthKnown) box.extend(p.p_W);
+  const double size = box.isEmpty() ? 1.0 : std::max(box.diagonal().norm(), 0.2);
   for (const auto& [id, line] : m_tracks)
-    if (line.size() >= 2) c.tracks.push_back(viz::TTrackView{id, line, viz::ETrackClass::Dynamic, std::nullopt});
+  {
+    viz::TTrackView tv{id, {}, viz::ETrackClass::Dynamic, std::nullopt};
+    for (const Vec3& p : line)
+      if (!box.isEmpty() && box.exteriorDistance(p) < size) tv.polyline_W.push_back(p);
+    if (tv.polyline_W.size() >= 2) c.tracks.push_back(std::move(tv));
+  }
   return c;
 }
 
@@ -64,7 +79,8 @@ void CVisualOutputs::onFrame(std::size_t frameIndex, const cv::Mat& image, const
   m_areas.push_back(r.meanSearchAreaPx2);
   m_probs.push_back(slam.modelProbabilities());
   const double gate = math::chi2Quantile(slam.options().search_probability, 2);
-  if (m_overlays && frameIndex % static_cast<std::size_t>(m_opts.overlay_every_n) == 0)
+  const bool liveOn = m_live && m_live->isOpen();
+  if (liveOn || (m_overlays && frameIndex % static_cast<std::size_t>(m_opts.overlay_every_n) == 0))
   {
     viz::TOverlayContent oc;
     for (const auto& s : r.searches)
@@ -102,13 +118,21 @@ void CVisualOutputs::onFrame(std::size_t frameIndex, const cv::Mat& image, const
       oc.textLines.push_back(buf);
     }
     for (const auto& t : extraText) oc.textLines.push_back(t);
-    m_overlays->write(static_cast<long>(frameIndex), viz::drawOverlay(image, oc));
+    const cv::Mat ov = viz::drawOverlay(image, oc);
+    if (m_overlays) m_overlays->write(static_cast<long>(frameIndex), ov);
+    if (liveOn)
+    {
+      m_live->showImage(ov);
+      if (frameIndex % static_cast<std::size_t>(std::max(1, m_opts.gui_scene_every_n)) == 0)
+        m_live->showScene(sceneContent(slam, trajectory, "imm-monoslam (live)"));
+    }
   }
   if (m_opts.scene_every_n > 0 && frameIndex % static_cast<std::size_t>(m_opts.scene_every_n) == 0)
   {
     char name[64];
     std::snprintf(name, sizeof name, "scene_%06zu", frameIndex);
-    const auto scene = viz::buildScene(sceneContent(slam, trajectory, name));
+    const auto content = sceneContent(slam, trajectory, name);
+    const auto scene = viz::buildScene(content, viz::sceneOptionsFitting(content));
     viz::saveSceneFile(*scene, (fs::path(m_dir) / (std::string(name) + ".3Dscene")).string());
     viz::renderScenePng(*scene, (fs::path(m_dir) / (std::string(name) + ".png")).string(), 800, 600);
   }
@@ -128,7 +152,7 @@ void CVisualOutputs::finish(const slam::CMonoSlamIMM& slam, const eval::TTraject
       // Ground truth shown in the estimate's frame: the inverse of the Sim(3) that aligned est -> gt.
       content.groundTruth = eval::applySim3(ate->sim3().inverse(), *groundTruth);
     }
-    const auto scene = viz::buildScene(content);
+    const auto scene = viz::buildScene(content, viz::sceneOptionsFitting(content));
     viz::saveSceneFile(*scene, (fs::path(m_dir) / "scene.3Dscene").string());
     std::string why;
     if (!viz::renderScenePng(*scene, (fs::path(m_dir) / "scene.png").string(), 1024, 768, viz::TRenderOptions(), &why))

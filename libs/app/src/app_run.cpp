@@ -213,7 +213,7 @@ int CImmMonoSlamApp::runImpl()
     throw std::runtime_error(m_args.config + ": " + e.what());
   }
   COutputFiles out(m_args.outDir, sys->slam(), sys->shadowFilter() != nullptr, outOpts.search_log);
-  CVisualOutputs visuals(m_args.outDir, outOpts, sys->slam());
+  CVisualOutputs visuals(m_args.outDir, outOpts, sys->slam(), CLiveView::available(m_args.noGui));
   // True motion labels per processed frame, when the input knows them (for the probability plot).
   auto* synthetic = dynamic_cast<sim::CSyntheticSource*>(source.get());
   const auto folderLabels = inputPath.empty() ? std::map<long long, std::string>() : readMotionLabels(inputPath);

@@ -2,6 +2,8 @@
 #include <immslam/viz/mrpt_conversions.h>
 #include <immslam/viz/scene.h>
 
+#include <Eigen/Geometry>
+
 #include <immslam/math/bearing.h>
 
 #include <mrpt/opengl/CEllipsoid3D.h>
@@ -415,5 +417,20 @@ mo::CRenderizable::Ptr findObject(const mo::COpenGLScene& scene, const std::stri
   for (const auto& obj : findObjectsByPrefix(scene, name))
     if (obj->getName() == name) return obj;
   return nullptr;
+}
+TSceneOptions sceneOptionsFitting(const TSceneContent& content)
+{
+  Eigen::AlignedBox3d box;
+  for (const auto& p : content.trajectory) box.extend(p.p_W_C);
+  for (const auto& p : content.points)
+    if (p.depthKnown) box.extend(p.p_W);
+  const double size = box.isEmpty() ? 1.0 : std::max(box.diagonal().norm(), 0.2);
+  TSceneOptions so;
+  so.showOriginAxes = false;
+  so.frustumDepth = 0.08 * size;
+  so.axesLength = 0.05 * size;
+  so.rayLength = 0.5 * size;
+  so.gridSpacing = 0.1 * size;
+  return so;
 }
 }  // namespace immslam::viz

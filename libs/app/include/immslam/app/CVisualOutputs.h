@@ -2,6 +2,7 @@
  * PNG snapshots, plots (model probabilities as the IMM paper's Fig. 4, search areas, ATE). */
 #pragma once
 
+#include <immslam/app/CLiveView.h>
 #include <immslam/app/app_options.h>
 #include <immslam/eval/ate.h>
 #include <immslam/slam/CMonoSlamIMM.h>
@@ -20,7 +21,9 @@ namespace immslam::app
 class CVisualOutputs
 {
  public:
-  CVisualOutputs(const std::string& outDir, const TOutputOptions& opts, const slam::CMonoSlamIMM& slam);
+  /** \param liveWindows also show the overlay and the scene in live MRPT windows (CLiveView). */
+  CVisualOutputs(const std::string& outDir, const TOutputOptions& opts, const slam::CMonoSlamIMM& slam,
+                 bool liveWindows = false);
   ~CVisualOutputs();
 
   /** Per processed frame: overlay (when enabled), periodic scene, and the series for the plots. */
@@ -42,6 +45,7 @@ class CVisualOutputs
   std::string m_dir;
   TOutputOptions m_opts;
   std::unique_ptr<viz::COverlayWriter> m_overlays;
+  std::unique_ptr<CLiveView> m_live;
   std::vector<double> m_times, m_areas;
   std::vector<VecX> m_probs;
   std::vector<std::string> m_modelNames;

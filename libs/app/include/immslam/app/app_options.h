@@ -31,6 +31,7 @@ struct TOutputOptions : public mrpt::config::CLoadableOptions
   int overlay_every_n = 1;  ///< every N frames
   bool overlay_video = false;  ///< also overlays.avi
   bool plots = true;        ///< PNG plots at the end (model probabilities, search areas, ATE)
+  int gui_scene_every_n = 10;  ///< live 3-D window refresh period (frames), when windows are open
   bool search_log = false;  ///< searches.csv (and shadow_log.csv): every search / shadow feature of every frame
 
   void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;

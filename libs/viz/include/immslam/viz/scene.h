@@ -144,6 +144,10 @@ struct TBox3
  * camera, features with a depth, anchors of features without one, and tracks. */
 TBox3 contentBox(const TSceneContent& content);
 
+/** Options sized from the trajectory and the features with a known depth (not from unknown-depth
+ * rays, which reach far): axes, frustum, ray length and grid follow the size of what was estimated. */
+TSceneOptions sceneOptionsFitting(const TSceneContent& content);
+
 /** Builds the scene described in this header's comment.
  * \throws std::runtime_error if an option is invalid (names it). Non-finite points are skipped;
  * ellipsoids are skipped for covariances that are not finite and positive definite. */
