@@ -3,9 +3,11 @@
  * start-up (no false depth), smaller search regions, the Occam property, accuracy vs the single model. */
 #include "test_helpers.h"
 
+#include <immslam/eval/segmentation.h>
 #include <immslam/eval/statistics.h>
 #include <immslam/sim/CSyntheticSource.h>
 
+#include <algorithm>
 #include <cmath>
 
 using namespace immslam;
@@ -16,6 +18,7 @@ namespace
 struct TRun
 {
   std::vector<std::vector<std::string>> probs, stats;
+  eval::TModelProbabilities mp;  ///< model_probabilities.csv as read by slam-eval
   app::TRunSummary summary;
 };
 
@@ -27,6 +30,7 @@ TRun runOn(const std::string& config, const std::vector<std::string>& extra, con
   args.insert(args.end(), extra.begin(), extra.end());
   EXPECT_EQ(runApp(args, &r.summary), 0);
   r.probs = readCsv(out + "/model_probabilities.csv");
+  r.mp = eval::readModelProbabilitiesCsv(out + "/model_probabilities.csv");
   r.stats = readCsv(out + "/frame_stats.csv");
   return r;
 }
@@ -37,15 +41,6 @@ double col(const std::vector<std::string>& row, const std::vector<std::string>& 
     if (head[j] == name) return std::stod(row[j]);
   ADD_FAILURE() << "no column " << name;
   return NAN;
-}
-
-/** Summed probability of the models of a family in one row. */
-double familyProbability(const std::vector<std::string>& head, const std::vector<std::string>& row, const std::string& fam)
-{
-  double p = 0;
-  for (std::size_t j = 1; j < head.size(); ++j)
-    if (head[j].rfind(fam, 0) == 0) p += std::stod(row[j]);
-  return p;
 }
 }  // namespace
 
@@ -58,34 +53,17 @@ TEST(IMMPaper, RenderedPaperScenarioReproducesTheClaims)
 
   // True labels of the same rendered sequence.
   sim::CSyntheticSource src(sourceDir() + "/ini/scenarios/paper.ini");
-  const std::size_t n = imm.probs.size() - 1;
+  const std::size_t n = imm.mp.times.size();
   std::vector<std::string> labels;
-  std::vector<double> times;
-  for (std::size_t k = 0; k < n; ++k)
-  {
-    labels.push_back(sim::toString(src.label(k)));
-    times.push_back(std::stod(imm.probs[k + 1][0]));
-  }
-  std::vector<double> transitions;
-  for (std::size_t k = 1; k < n; ++k)
-    if (labels[k] != labels[k - 1]) transitions.push_back(times[k]);
-  ASSERT_EQ(transitions.size(), 4u);
+  for (std::size_t k = 0; k < n; ++k) labels.push_back(sim::toString(src.label(k)));
 
-  // Segmentation: the family with the highest summed probability matches the true label.
-  int ok = 0, counted = 0;
-  for (std::size_t k = 0; k < n; ++k)
-  {
-    bool nearTransition = false;
-    for (double t : transitions) nearTransition |= std::abs(times[k] - t) < 0.5;
-    if (nearTransition) continue;
-    std::string best;
-    double bestP = -1;
-    for (const char* fam : {"stationary", "rotation", "general"})
-      if (const double p = familyProbability(imm.probs[0], imm.probs[k + 1], fam); p > bestP) bestP = p, best = fam;
-    ok += best == labels[k] ? 1 : 0;
-    ++counted;
-  }
-  const double segmentation = static_cast<double>(ok) / counted;
+  // Segmentation: the family with the highest summed probability matches the true label (frames
+  // within 0.5 s of a label change not counted).
+  const eval::TSegmentationResult seg =
+      eval::segmentationAccuracy(imm.mp.times, imm.mp.modelNames, imm.mp.probs, labels, 0.5);
+  const std::vector<double>& transitions = seg.transitions;
+  ASSERT_EQ(transitions.size(), 4u);
+  const double segmentation = seg.accuracy;
 
   // Consistent start-up (Fig. 3): share of features with a known depth at the end of the
   // stationary + rotation start.
@@ -130,11 +108,14 @@ TEST(IMMPaper, EurocCameraAtRestIsStationary)
 {
   if (!haveSharedData("euroc_v101_stationary")) GTEST_SKIP() << "../shared/data/euroc_v101_stationary is absent";
   const TRun imm = runOn("imm7.ini", {sharedData("euroc_v101_stationary")}, "euroc_imm7");
+  const eval::TFamilyProbabilities fam = eval::familyProbabilities(imm.mp.modelNames, imm.mp.probs);
+  const auto stationary = std::find(fam.families.begin(), fam.families.end(), "stationary") - fam.families.begin();
+  ASSERT_LT(stationary, static_cast<std::ptrdiff_t>(fam.families.size()));
   int ok = 0, counted = 0;
   double minP = 1;
-  for (std::size_t k = 10; k < imm.probs.size(); ++k)  // from the 10th frame on
+  for (Eigen::Index k = 9; k < fam.probs.rows(); ++k)  // from the 10th frame on
   {
-    const double p = familyProbability(imm.probs[0], imm.probs[k], "stationary");
+    const double p = fam.probs(k, stationary);
     ok += p >= 0.9 ? 1 : 0;
     minP = std::min(minP, p);
     ++counted;

@@ -1,4 +1,4 @@
-/* imm-monoslam — the imm-eval program: ATE (and optionally RPE) of a TUM trajectory. */
+/* imm-monoslam — the ATE report of slam-eval: ATE (and optionally RPE) of a TUM trajectory. */
 #include <immslam/eval/TTrajectory.h>
 #include <immslam/eval/ate.h>
 #include <immslam/eval/eval_app.h>
@@ -152,7 +152,7 @@ std::string evalAppUsage(const std::string& prog)
 
 int runEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ostream& err)
 {
-  const std::string prog = args.empty() ? "imm-eval" : args[0];
+  const std::string prog = args.empty() ? "slam-eval ate" : args[0];
   TAppOptions o;
   try
   {

@@ -1,5 +1,5 @@
 /* Tests: TUM I/O, association, Umeyama alignment, ATE/RPE, NEES and chi-square bands, confusion
- * matrix, statistics, and the imm-eval program run in-process. */
+ * matrix, statistics, and the ATE report of slam-eval run in-process. */
 #include <gtest/gtest.h>
 #include <immslam/eval/TTrajectory.h>
 #include <immslam/eval/alignment.h>
@@ -122,6 +122,11 @@ TEST(TumIO, FormatOrderCommentsAndNormalization)
   EXPECT_EQ(tr[1].p_W_C, Vec3(4, 5, 6));
   EXPECT_EQ(tr[2].p_W_C, Vec3(1, 2, 3));
   EXPECT_EQ(tr[2].q_W_C, Vec4(0, 0, 0, 1));
+  // Components near DBL_MAX: the norm must not overflow (found by fuzzing, tests/fuzz).
+  writeText(path, "1 0 0 0 1e308 1e308 0 1e308\n");
+  const TTrajectory big = readTumTrajectory(path);
+  EXPECT_NEAR(big[0].q_W_C.norm(), 1.0, 1e-15);
+  EXPECT_NEAR(big[0].q_W_C[0], 1 / std::sqrt(3.0), 1e-15);
 }
 
 TEST(TumIO, MalformedLineErrorNamesFileAndLine)
@@ -714,7 +719,7 @@ TEST(Statistics, AgainstHandComputedValues)
 }
 
 // ---------------------------------------------------------------------------------------------
-// The imm-eval program, in process.
+// The ATE report (slam-eval ate, formerly imm-eval), in process.
 TEST(EvalApp, ExitCodesAndReport)
 {
   std::mt19937 rng(16);
@@ -725,7 +730,7 @@ TEST(EvalApp, ExitCodesAndReport)
   writeTumTrajectory(est, e);
   writeText(bad, "1 2 3\n");
   const auto run = [](std::vector<std::string> args, std::string* out = nullptr, std::string* err = nullptr) {
-    args.insert(args.begin(), "imm-eval");
+    args.insert(args.begin(), "slam-eval ate");
     std::ostringstream o, r;
     const int rc = runEvalApp(args, o, r);
     if (out) *out = o.str();

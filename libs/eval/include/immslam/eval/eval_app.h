@@ -1,4 +1,4 @@
-/* imm-monoslam — the imm-eval program as a library function (the app's main is a thin wrapper). */
+/* imm-monoslam — the ATE report of slam-eval (`slam-eval ate`, formerly the imm-eval program). */
 #pragma once
 
 #include <iosfwd>
@@ -7,8 +7,9 @@
 
 namespace immslam::eval
 {
-/** Runs `imm-eval EST.txt GT.txt [--sim3|--se3|--no-align] [--max-dt S] [--rpe DELTA] [--json]`:
+/** Runs `PROG EST.txt GT.txt [--sim3|--se3|--no-align] [--max-dt S] [--rpe DELTA] [--json]`:
  * reads two TUM trajectories, computes the ATE (computeAte) and prints it as text or JSON to out.
+ * This is `slam-eval ate` (runSlamEvalApp(), slam_eval_app.h, calls it with PROG = "slam-eval ate").
  * \param args the command line, args[0] being the program name.
  * \param out  report (and --help text).
  * \param err  error messages.

@@ -1,0 +1,243 @@
+/* imm-monoslam — the slam-eval program: subcommand dispatch and the segmentation, classification
+ * and NIS reports (the ATE report is runEvalApp(), eval_app.cpp). */
+#include <immslam/eval/classification_truth.h>
+#include <immslam/eval/eval_app.h>
+#include <immslam/eval/search_nis.h>
+#include <immslam/eval/segmentation.h>
+#include <immslam/eval/slam_eval_app.h>
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <ostream>
+#include <stdexcept>
+
+namespace immslam::eval
+{
+namespace
+{
+struct TUsageError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+
+/** A parsed subcommand line: positionals, flags and "--name V" / "--name=V" values. */
+struct TParsed
+{
+  std::vector<std::string> positional;
+  std::map<std::string, std::string> values;
+  bool help = false;
+
+  std::optional<std::string> value(const std::string& name) const
+  {
+    const auto it = values.find(name);
+    return it == values.end() ? std::nullopt : std::optional<std::string>(it->second);
+  }
+};
+
+TParsed parse(const std::vector<std::string>& args, std::size_t first, const std::vector<std::string>& valueOptions)
+{
+  TParsed p;
+  for (std::size_t i = first; i < args.size(); ++i)
+  {
+    const std::string& a = args[i];
+    if (a == "--help" || a == "-h")
+    {
+      p.help = true;
+      continue;
+    }
+    if (a.size() < 2 || a[0] != '-')
+    {
+      p.positional.push_back(a);
+      continue;
+    }
+    const std::size_t eq = a.find('=');
+    const std::string name = a.substr(0, eq);
+    bool known = false;
+    for (const auto& o : valueOptions) known = known || o == name;
+    if (!known) throw TUsageError("unknown option '" + a + "'");
+    if (p.values.count(name)) throw TUsageError(name + " given twice");
+    if (eq != std::string::npos)
+      p.values[name] = a.substr(eq + 1);
+    else if (i + 1 < args.size())
+      p.values[name] = args[++i];
+    else
+      throw TUsageError(name + " needs a value");
+  }
+  return p;
+}
+
+double parseNumber(const std::string& name, const std::string& s, double lo, double hi)
+{
+  double v = 0;
+  const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || r.ec != std::errc() || r.ptr != s.data() + s.size() || !std::isfinite(v) || v < lo || v > hi)
+    throw TUsageError(name + ": '" + s + "' is not a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return v;
+}
+
+void requirePositional(const TParsed& p, std::size_t n, const std::string& what)
+{
+  if (p.positional.size() != n)
+    throw TUsageError("expected " + what + ", got " + std::to_string(p.positional.size()) + " file(s)");
+}
+
+std::string segmentationUsage(const std::string& prog)
+{
+  return "Usage: " + prog + " model_probabilities.csv motion_labels.txt [--exclude S] [--max-dt S]\n"
+         "Motion segmentation of an IMM run: per frame, the model family (name before '_') with the\n"
+         "highest summed probability against the true label (stationary|rotation|general) of the\n"
+         "renderer's motion_labels.txt. Frames are joined by timestamp.\n"
+         "  --exclude S  frames closer than S seconds to a label change are not counted (default 0.5)\n"
+         "  --max-dt S   largest timestamp difference when joining the files (default 0.0001)\n";
+}
+
+std::string classificationUsage(const std::string& prog)
+{
+  return "Usage: " + prog + " classifications.csv (--masks DATASET_FOLDER | --points points_groundtruth.txt)\n"
+         "       [--radius PX] [--max-dt S]\n"
+         "Static/dynamic decisions of the shadow filter against ground truth:\n"
+         "  --masks DIR   a rendered dataset folder: rgb.txt names the image of each timestamp and\n"
+         "                masks/<name> its object mask (0 static, > 0 moving); a decision is truly\n"
+         "                dynamic if a pixel of the (2 PX + 1)^2 neighbourhood is non-zero (PX default 1)\n"
+         "  --points F    projected ground-truth points 'timestamp point_id kind x y z u v': the\n"
+         "                nearest point within PX pixels (default 3) gives the truth; decisions\n"
+         "                farther from every point are reported as unmatched\n"
+         "  --radius PX   see above\n"
+         "  --max-dt S    largest timestamp difference when joining the files (default 0.0001)\n";
+}
+
+std::string nisUsage(const std::string& prog)
+{
+  return "Usage: " + prog + " searches.csv [--confidence C]\n"
+         "NIS (z-h)^T S^-1 (z-h) of the matches used in the update (status inlier or rescued) of the\n"
+         "app's searches.csv ([output] search_log = true): mean, mean per dof (1 for a consistent\n"
+         "filter) and the fraction inside the chi-square(2) bound of probability C (default 0.95).\n";
+}
+
+int runSegmentation(const std::string& prog, const std::vector<std::string>& args, std::ostream& out)
+{
+  const TParsed p = parse(args, 2, {"--exclude", "--max-dt"});
+  if (p.help) return out << segmentationUsage(prog), 0;
+  requirePositional(p, 2, "model_probabilities.csv motion_labels.txt");
+  const double exclude = p.value("--exclude") ? parseNumber("--exclude", *p.value("--exclude"), 0, 1e9) : 0.5;
+  const double maxDt = p.value("--max-dt") ? parseNumber("--max-dt", *p.value("--max-dt"), 0, 1e9) : 1e-4;
+  const TModelProbabilities probs = readModelProbabilitiesCsv(p.positional[0]);
+  const TMotionLabels labels = readMotionLabels(p.positional[1]);
+  if (probs.times.empty()) throw std::runtime_error(p.positional[0] + ": no rows");
+  if (labels.times.empty()) throw std::runtime_error(p.positional[1] + ": no labels");
+  TSegmentationResult r;
+  try
+  {
+    r = segmentationAccuracy(probs, labels, exclude, maxDt);
+  }
+  catch (const std::exception& e)
+  {
+    throw std::runtime_error(p.positional[0] + " vs " + p.positional[1] + ": " + e.what());
+  }
+  out << "probabilities: " << p.positional[0] << " (" << probs.times.size() << " frames, " << probs.modelNames.size()
+      << " models)\nlabels       : " << p.positional[1] << " (" << labels.times.size() << " frames)\n"
+      << r.summary();
+  return 0;
+}
+
+int runClassification(const std::string& prog, const std::vector<std::string>& args, std::ostream& out)
+{
+  const TParsed p = parse(args, 2, {"--masks", "--points", "--radius", "--max-dt"});
+  if (p.help) return out << classificationUsage(prog), 0;
+  requirePositional(p, 1, "classifications.csv");
+  const auto masks = p.value("--masks"), points = p.value("--points");
+  if (masks.has_value() == points.has_value()) throw TUsageError("give exactly one of --masks DIR and --points FILE");
+  const double maxDt = p.value("--max-dt") ? parseNumber("--max-dt", *p.value("--max-dt"), 0, 1e9) : 1e-4;
+  double radius = masks ? 1 : 3;
+  if (const auto rv = p.value("--radius"))
+  {
+    radius = parseNumber("--radius", *rv, 0, 1e4);
+    if (masks && radius != std::floor(radius)) throw TUsageError("--radius: a whole number of pixels with --masks");
+  }
+  const auto decisions = readClassificationsCsv(p.positional[0]);
+  TClassificationResult r;
+  if (masks)
+    r = classificationAgainstMaskFolder(decisions, *masks, static_cast<int>(radius), maxDt);
+  else
+    r = classificationAgainstPoints(decisions, readPointsGroundTruth(*points), radius, maxDt);
+  out << "decisions    : " << p.positional[0] << " (" << decisions.size() << ")\n"
+      << "ground truth : " << (masks ? "masks of " + *masks : "points of " + *points) << " (radius " << radius
+      << " px)\n"
+      << r.summary();
+  return 0;
+}
+
+int runNis(const std::string& prog, const std::vector<std::string>& args, std::ostream& out)
+{
+  const TParsed p = parse(args, 2, {"--confidence"});
+  if (p.help) return out << nisUsage(prog), 0;
+  requirePositional(p, 1, "searches.csv");
+  const double conf = p.value("--confidence") ? parseNumber("--confidence", *p.value("--confidence"), 1e-9, 1 - 1e-9)
+                                              : 0.95;
+  const auto rows = readSearchesCsv(p.positional[0]);
+  out << "searches     : " << p.positional[0] << "\n" << computeSearchNis(rows, conf).summary();
+  return 0;
+}
+}  // namespace
+
+std::string slamEvalAppUsage(const std::string& prog)
+{
+  return "Usage: " + prog + " COMMAND ARGS... [options]   (" + prog + " COMMAND --help for details)\n"
+         "Evaluation of imm-monoslam's outputs against ground truth.\n"
+         "  " + prog + " ate EST.txt GT.txt [--sim3|--se3|--no-align] [--max-dt S] [--rpe DELTA] [--json]\n"
+         "      absolute trajectory error after Sim(3) (default) or SE(3) alignment, also relative to\n"
+         "      the path length; RPE over DELTA frames. '" + prog + " EST.txt GT.txt ...' is the same.\n"
+         "  " + prog + " segmentation model_probabilities.csv motion_labels.txt [--exclude S]\n"
+         "      motion segmentation accuracy of the IMM bank (most probable family vs true label)\n"
+         "  " + prog + " classification classifications.csv (--masks DATASET_FOLDER | --points\n"
+         "      points_groundtruth.txt) [--radius PX]: static/dynamic confusion matrix\n"
+         "  " + prog + " nis searches.csv: NIS of the matches used in the update vs chi-square(2)\n"
+         "  " + prog + " --help\n"
+         "Exit status: 0 success, 1 bad input (the message names the file and line), 2 bad usage.\n";
+}
+
+int runSlamEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ostream& err)
+{
+  const std::string prog =
+      args.empty() || args[0].empty() ? "slam-eval" : std::filesystem::path(args[0]).filename().string();
+  if (args.size() < 2)
+  {
+    err << prog << ": no command given\n" << slamEvalAppUsage(prog);
+    return 2;
+  }
+  const std::string& cmd = args[1];
+  if (cmd == "--help" || cmd == "-h")
+  {
+    out << slamEvalAppUsage(prog);
+    return 0;
+  }
+  if (cmd == "ate" || (cmd != "segmentation" && cmd != "classification" && cmd != "nis"))
+  {
+    // ATE: the subcommand, or the old form (imm-eval) 'slam-eval EST.txt GT.txt ...'.
+    std::vector<std::string> a{cmd == "ate" ? prog + " ate" : prog};
+    a.insert(a.end(), args.begin() + (cmd == "ate" ? 2 : 1), args.end());
+    return runEvalApp(a, out, err);
+  }
+  const std::string sub = prog + " " + cmd;
+  try
+  {
+    if (cmd == "segmentation") return runSegmentation(sub, args, out);
+    if (cmd == "classification") return runClassification(sub, args, out);
+    return runNis(sub, args, out);
+  }
+  catch (const TUsageError& e)
+  {
+    err << sub << ": " << e.what() << "\n"
+        << (cmd == "segmentation" ? segmentationUsage(sub) : cmd == "classification" ? classificationUsage(sub) : nisUsage(sub));
+    return 2;
+  }
+  catch (const std::exception& e)
+  {
+    err << sub << ": " << e.what() << "\n";
+    return 1;
+  }
+}
+}  // namespace immslam::eval
