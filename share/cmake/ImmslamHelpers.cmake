@@ -1,6 +1,9 @@
 # Helpers shared by every module: one library per libs/<mod>, one gtest binary per test file.
 
-set(IMMSLAM_WARNINGS -Wall -Wextra -Wpedantic -Wshadow=local -Wnon-virtual-dtor)
+set(IMMSLAM_WARNINGS -Wall -Wextra -Wpedantic -Wnon-virtual-dtor)
+if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+  list(APPEND IMMSLAM_WARNINGS -Wshadow=local)  # gcc only (clang has no =local variant)
+endif()
 
 # immslam_add_library(<mod> SOURCES ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...])
 # Creates target immslam_<mod> (alias immslam::<mod>) from libs/<mod>/{include,src}.

@@ -7,6 +7,7 @@ PKGS=(
   libopencv-dev libeigen3-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libegl1 libegl-mesa0 libgl1-mesa-dri   # offscreen scene snapshots (EGL, no X needed)
+  clang libclang-rt-14-dev llvm-14       # fuzz.sh: libFuzzer + sanitizer runtimes, llvm-symbolizer
 )
 missing=()
 for p in "${PKGS[@]}"; do

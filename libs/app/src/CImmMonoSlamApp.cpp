@@ -2,6 +2,7 @@
 #include <immslam/app/CImmMonoSlamApp.h>
 
 #include <immslam/app/app_options.h>
+#include <immslam/core/config.h>
 #include <immslam/io/CLiveCameraSource.h>
 #include <immslam/system/CMonoSlamSystem.h>
 
@@ -171,6 +172,17 @@ int CImmMonoSlamApp::initialize(const std::vector<std::string>& args)
     std::ifstream f(m_args.config);
     std::stringstream ss;
     ss << f.rdbuf();
+    // MRPT's parser silently drops lines it cannot read (no '=', keys before any [section], junk):
+    // a mistyped line would leave its key at the default. Refuse them, naming file and line.
+    try
+    {
+      core::checkIniSyntax(ss.str(), m_args.config);
+    }
+    catch (const std::exception& e)
+    {
+      std::cerr << "imm-monoslam: error: " << e.what() << "\n";
+      return 1;
+    }
     m_cfg.setContent(ss.str());
   }
   m_configDir = fs::path(m_args.config).parent_path().string();

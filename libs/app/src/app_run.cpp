@@ -373,6 +373,13 @@ int CImmMonoSlamApp::runImpl()
               << (m_summary.skipReasons.empty() ? std::string() : "; first: " + m_summary.skipReasons[0]) << ")\n";
     return 1;
   }
+  if (source->endedOnDamage())
+  {
+    // Every output up to the damage is written (above); the damage itself is an error of the input.
+    std::cerr << "imm-monoslam: error: " << m_summary.endReason << " (outputs up to it written to " << m_args.outDir
+              << ")\n";
+    return 1;
+  }
   return 0;
 }
 }  // namespace immslam::app

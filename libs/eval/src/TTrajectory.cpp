@@ -72,7 +72,7 @@ TTrajectory readTumTrajectory(const std::string& path)
     p.timestamp = v[0];
     p.p_W_C = Vec3(v[1], v[2], v[3]);
     const Vec4 q(v[7], v[4], v[5], v[6]);  // file: qx qy qz qw -> ours: qw qx qy qz
-    const double n = q.norm();
+    const double n = q.stableNorm();  // no overflow for components near DBL_MAX (fuzz: tests/fuzz/regressions/dataset)
     if (!(n > 1e-12)) throw std::runtime_error(where() + "zero quaternion");
     p.q_W_C = q / n;
     traj.push_back(p);

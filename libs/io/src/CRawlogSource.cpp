@@ -263,6 +263,8 @@ CRawlogSource::CRawlogSource(const std::string& path) : m_impl(std::make_unique<
 
 CRawlogSource::~CRawlogSource() = default;
 
+bool CRawlogSource::endedOnDamage() const { return m_impl->ended && !m_impl->endWhy.empty(); }
+
 ENextStatus CRawlogSource::next(TFrame& frame, std::string& why)
 {
   Impl& m = *m_impl;

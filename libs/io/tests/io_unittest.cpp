@@ -548,7 +548,8 @@ TEST(Rawlog, MixedObservationsSkippedAndCounted)
   EXPECT_EQ(src.calibration(), nullptr);  // default (zero) cameraParams
   ASSERT_TRUE(src.groundTruth());
   ASSERT_EQ(src.groundTruth()->size(), 2u);
-  const auto& g = (*src.groundTruth())[1];
+  const eval::TTrajectory gtAll = *src.groundTruth();  // groundTruth() returns a copy: keep it alive
+  const auto& g = gtAll[1];
   EXPECT_NEAR(g.timestamp, 13.0, 1e-6);
   EXPECT_NEAR(g.p_W_C.x(), 3.0, 1e-12);
   // yaw 0.3 about z: q = (cos 0.15, 0, 0, sin 0.15), scalar first.

@@ -130,7 +130,9 @@ TEST(MotionIncrement, JacobiansAndAgreementWithWorldModel)
       xw.segment<3>(kV) = math::quatRotate(x.segment<4>(kQ), v);
       const Vec13 xn = predictCamera(m, xw, dt, 200);
       if (m.family == EMotionFamily::General)
+      {
         EXPECT_LT((xn.head<3>() - (x.head<3>() + math::quatRotate(x.segment<4>(kQ), inc.t))).norm(), 1e-12);
+      }
       EXPECT_LT((xn.segment<4>(kQ) - math::quatMultiply(x.segment<4>(kQ), inc.dq)).norm(), 1e-12);
     }
 }

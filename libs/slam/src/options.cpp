@@ -90,7 +90,7 @@ void CMonoSlamIMM::TOptions::validate(const std::string& s) const
   core::requirePositive(min_sigma_pixel, s, "min_sigma_pixel");
   core::requireInRange(max_sigma_pixel, min_sigma_pixel, 1e3, s, "max_sigma_pixel");
   core::requirePositive(init_rho_std, s, "init_rho_std");
-  if (!std::isfinite(init_rho)) core::requirePositive(init_rho, s, "init_rho");
+  core::requireNonNegative(init_rho, s, "init_rho");  // rho < 0 puts every new feature behind the camera
   core::requireNonNegative(init_linear_velocity_std_px, s, "init_linear_velocity_std_px");
   core::requireNonNegative(init_angular_velocity_std_px, s, "init_angular_velocity_std_px");
   core::requireNonNegative(frame_rate_hz, s, "frame_rate_hz");

@@ -13,7 +13,7 @@ struct TInputOptions : public mrpt::config::CLoadableOptions
   /** `synthetic` (the built-in renderer), or a .rawlog / dataset folder path (relative paths are
    * resolved against the config file's folder, then the current folder). */
   std::string source = "synthetic";
-  /** Scenario of the synthetic source (ini/scenarios/*.ini); empty: the built-in default scene. */
+  /** Scenario of the synthetic source (a file like ini/scenarios/handheld.ini); empty: the built-in default scene. */
   std::string scenario;
   /** Frame rate assumed for live sources without timestamps (image_dir, ffmpeg). */
   double live_frame_rate_hz = 30;

@@ -65,6 +65,10 @@ class CImageSource
 
   /** Number of entries if known in advance (for progress/ETA), else 0. */
   virtual std::size_t sizeHint() const { return 0; }
+
+  /** True once next() has returned End because the input is damaged (truncated or corrupted file)
+   * rather than at its normal end: the application then writes its outputs and exits with status 1. */
+  virtual bool endedOnDamage() const { return false; }
 };
 
 /** Opens a dataset folder (../shared/data/README.md format) or a .rawlog file (either MRPT layout),

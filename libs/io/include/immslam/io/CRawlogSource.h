@@ -58,6 +58,7 @@ class CRawlogSource : public CImageSource
   std::optional<eval::TTrajectory> groundTruth() const override;
   std::string describe() const override;
   std::size_t sizeHint() const override;
+  bool endedOnDamage() const override;
 
   /** Number of top-level objects read without error by the first pass. */
   std::size_t entryCount() const;
