@@ -2,6 +2,7 @@
 #include <immslam/app/COutputFiles.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <stdexcept>
 
@@ -33,7 +34,8 @@ COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& sla
     m_classes = std::make_unique<io::CCsvWriter>(path("classifications.csv"),
                                                  std::vector<std::string>{"timestamp", "feature_id", "class", "u", "v"});
     m_tracks = std::make_unique<io::CCsvWriter>(
-        path("tracks.csv"), std::vector<std::string>{"timestamp", "feature_id", "x", "y", "z", "u", "v", "vx", "vy", "vz"});
+        path("tracks.csv"), std::vector<std::string>{"timestamp", "feature_id", "x", "y", "z", "u", "v", "vx", "vy", "vz", "range",
+                                                 "range_rel_sigma"});
   }
   if (searchLog && shadow)
     m_shadowLog = std::make_unique<io::CCsvWriter>(
@@ -78,8 +80,12 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
     m_classes->flush();
     for (const auto& t : fr.shadow->tracks)
       if (t.measured)
+      {
+        // range: distance from the camera; range_rel_sigma: its relative 1-sigma (sigma_w / w), small
+        // for a located point, large for a bearing of unknown depth.
         m_tracks->addCells({r.timestamp, t.id, t.p_W.x(), t.p_W.y(), t.p_W.z(), t.uv.x(), t.uv.y(), t.v_W.x(), t.v_W.y(),
-                            t.v_W.z()});
+                            t.v_W.z(), (t.p_W - pose.p_W_C).norm(), t.distanceRelativeStd});
+      }
     m_tracks->flush();
     if (m_shadowLog)
     {

@@ -3,6 +3,7 @@
 #include <immslam/camera/COpenCVCamera.h>
 #include <immslam/camera/CPinholeCamera.h>
 #include <immslam/camera/mrpt_camera.h>
+#include <immslam/math/text.h>
 
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/img/TCamera.h>
@@ -19,20 +20,6 @@ namespace immslam::camera
 {
 namespace
 {
-std::string trim(const std::string& s)
-{
-  const auto b = s.find_first_not_of(" \t\r\n\v\f");
-  if (b == std::string::npos) return {};
-  const auto e = s.find_last_not_of(" \t\r\n\v\f");
-  return s.substr(b, e - b + 1);
-}
-
-std::string lower(std::string s)
-{
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
-}
-
 bool parseDouble(const std::string& word, double& out)
 {
   const char* end = word.data() + word.size();
@@ -61,7 +48,7 @@ class CSectionReader
   /** The trimmed value, or "" if the key is absent. */
   std::string str(const std::string& key) const
   {
-    return has(key) ? trim(m_cfg.read_string(m_section, key, "", false)) : std::string();
+    return has(key) ? math::trim(m_cfg.read_string(m_section, key, "", false)) : std::string();
   }
 
   double requiredDouble(const std::string& key) const
@@ -194,12 +181,12 @@ CCameraModel::Ptr loadCameraFromConfig(
   if (cx < 2.0) cx *= w;
   if (cy < 2.0) cy *= h;
 
-  std::string model = lower(r.str("model"));
+  std::string model = math::toLower(r.str("model"));
   const std::vector<double> dist = r.list("dist");
   const bool explicitModel = !model.empty();
   if (!explicitModel)
   {
-    const std::string dm = lower(r.str("distortion_model"));
+    const std::string dm = math::toLower(r.str("distortion_model"));
     if (dm == "none")
       model = "pinhole";
     else if (dm == "plumb_bob")

@@ -1,5 +1,6 @@
 /* imm-monoslam — strict configuration reading. */
 #include <immslam/core/config.h>
+#include <immslam/math/text.h>
 #include <mrpt/config/CConfigFileMemory.h>
 
 #include <algorithm>
@@ -14,26 +15,18 @@ namespace immslam::core
 {
 namespace
 {
-std::string trim(const std::string& s)
-{
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return {};
-  const auto e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
-}
-
 /** The raw value text, or nullopt-like empty flag when the key is absent. */
 bool rawValue(const mrpt::config::CConfigFileBase& c, const std::string& section, const std::string& key, std::string& out)
 {
   if (!c.keyExists(section, key)) return false;
-  out = trim(c.read_string(section, key, ""));
+  out = math::trim(c.read_string(section, key, ""));
   // Strip trailing comments that MRPT's parser keeps: "// ..." and " # ..." (a '#' after a blank).
   const auto cpos = out.find("//");
-  if (cpos != std::string::npos) out = trim(out.substr(0, cpos));
+  if (cpos != std::string::npos) out = math::trim(out.substr(0, cpos));
   for (std::size_t i = 1; i < out.size(); ++i)
     if (out[i] == '#' && (out[i - 1] == ' ' || out[i - 1] == '\t'))
     {
-      out = trim(out.substr(0, i));
+      out = math::trim(out.substr(0, i));
       break;
     }
   if (!out.empty() && out[0] == '#') out.clear();
@@ -132,7 +125,7 @@ std::set<std::string> knownKeys(const mrpt::config::CLoadableOptions& opts, cons
   std::vector<std::string> keys;
   mem.getAllKeys(section, keys);
   std::set<std::string> out;
-  for (const auto& k : keys) out.insert(trim(k));  // MRPT pads saved names
+  for (const auto& k : keys) out.insert(math::trim(k));  // MRPT pads saved names
   return out;
 }
 
@@ -145,7 +138,7 @@ void checkKnownKeys(const mrpt::config::CConfigFileBase& c, const std::string& s
   int nBad = 0;
   for (const auto& kRaw : keys)
   {
-    const std::string k = trim(kRaw);
+    const std::string k = math::trim(kRaw);
     if (known.count(k)) continue;
     std::string best;
     std::size_t bestD = 1000;
@@ -165,7 +158,7 @@ void checkIniSyntax(const std::string& text, const std::string& origin)
   std::map<std::string, std::size_t> seen;  // keys of the current section -> line
   for (std::size_t lineNo = 1; std::getline(in, raw); ++lineNo)
   {
-    const std::string line = trim(raw);
+    const std::string line = math::trim(raw);
     const auto where = [&] { return origin + ":" + std::to_string(lineNo) + ": "; };
     const auto shown = [&] {
       std::string t = line.size() > 60 ? line.substr(0, 60) + "..." : line;
@@ -177,11 +170,11 @@ void checkIniSyntax(const std::string& text, const std::string& origin)
     if (line[0] == '[')
     {
       const auto close = line.find(']');
-      const std::string rest = close == std::string::npos ? std::string() : trim(line.substr(close + 1));
-      if (close == std::string::npos || trim(line.substr(1, close - 1)).empty() ||
+      const std::string rest = close == std::string::npos ? std::string() : math::trim(line.substr(close + 1));
+      if (close == std::string::npos || math::trim(line.substr(1, close - 1)).empty() ||
           !(rest.empty() || rest[0] == '#' || rest[0] == ';' || rest.rfind("//", 0) == 0))
         throw std::runtime_error(where() + "malformed section header " + shown() + " (expected [name])");
-      section = trim(line.substr(1, close - 1));
+      section = math::trim(line.substr(1, close - 1));
       inSection = true;
       seen.clear();
       continue;
@@ -189,7 +182,7 @@ void checkIniSyntax(const std::string& text, const std::string& origin)
     const auto eq = line.find('=');
     if (eq == std::string::npos)
       throw std::runtime_error(where() + shown() + " is not 'key = value' (missing '='?)");
-    const std::string key = trim(line.substr(0, eq));
+    const std::string key = math::trim(line.substr(0, eq));
     if (key.empty()) throw std::runtime_error(where() + shown() + ": no key before '='");
     if (key.find_first_of(" \t[]") != std::string::npos)
       throw std::runtime_error(where() + "malformed key '" + key + "' in " + shown());

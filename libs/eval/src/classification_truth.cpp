@@ -11,6 +11,8 @@
 #include <map>
 #include <numeric>
 #include <ostream>
+#include <set>
+#include <sstream>
 #include <stdexcept>
 
 namespace immslam::eval
@@ -166,36 +168,154 @@ std::vector<TGroundTruthPoint> readPointsGroundTruth(const std::string& path)
   return out;
 }
 
+namespace
+{
+/** Ground-truth points grouped by frame time, for nearest-pixel lookups. */
+class CPointsByFrame
+{
+ public:
+  explicit CPointsByFrame(const std::vector<TGroundTruthPoint>& points) : m_points(points), m_order(points.size())
+  {
+    // Sorted by time (stable: file order within a frame), with the distinct frame times.
+    std::iota(m_order.begin(), m_order.end(), std::size_t{0});
+    std::stable_sort(m_order.begin(), m_order.end(),
+                     [&](std::size_t a, std::size_t b) { return points[a].timestamp < points[b].timestamp; });
+    for (std::size_t i = 0; i < m_order.size(); ++i)
+      if (m_times.empty() || points[m_order[i]].timestamp != m_times.back())
+        m_times.push_back(points[m_order[i]].timestamp), m_start.push_back(i);
+    m_start.push_back(m_order.size());
+  }
+
+  /** The point of the frame within maxDt of t whose projection is nearest to uv, if at most
+   * radiusPx away; null otherwise. */
+  const TGroundTruthPoint* nearest(double t, const Vec2& uv, double radiusPx, double maxDt) const
+  {
+    const std::ptrdiff_t f = detail::nearestTime(m_times, t, maxDt);
+    if (f < 0) return nullptr;
+    double best = std::numeric_limits<double>::infinity();
+    const TGroundTruthPoint* found = nullptr;
+    for (std::size_t i = m_start[static_cast<std::size_t>(f)]; i < m_start[static_cast<std::size_t>(f) + 1]; ++i)
+    {
+      const TGroundTruthPoint& p = m_points[m_order[i]];
+      if (const double dist = std::hypot(p.uv.x() - uv.x(), p.uv.y() - uv.y()); dist < best) best = dist, found = &p;
+    }
+    return best <= radiusPx ? found : nullptr;
+  }
+
+ private:
+  const std::vector<TGroundTruthPoint>& m_points;
+  std::vector<std::size_t> m_order;
+  std::vector<double> m_times;
+  std::vector<std::size_t> m_start;  // index into m_order of each frame's first point, + end
+};
+}  // namespace
+
 TClassificationResult classificationAgainstPoints(const std::vector<TClassificationDecision>& decisions,
                                                   const std::vector<TGroundTruthPoint>& points, double radiusPx,
                                                   double maxDt)
 {
   if (!(radiusPx >= 0)) throw std::invalid_argument("classificationAgainstPoints: radius must be >= 0 px");
-  // Points sorted by time (stable: file order within a frame), with the distinct frame times.
-  std::vector<std::size_t> order(points.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return points[a].timestamp < points[b].timestamp; });
-  std::vector<double> frameTimes;
-  std::vector<std::size_t> frameStart;  // index into order
-  for (std::size_t i = 0; i < order.size(); ++i)
-    if (frameTimes.empty() || points[order[i]].timestamp != frameTimes.back())
-      frameTimes.push_back(points[order[i]].timestamp), frameStart.push_back(i);
-  frameStart.push_back(order.size());
-
+  const CPointsByFrame byFrame(points);
   return evaluateClassifications(decisions, [&](const TClassificationDecision& d) -> std::optional<EMotionClass> {
-    const std::ptrdiff_t f = detail::nearestTime(frameTimes, d.timestamp, maxDt);
-    if (f < 0) return std::nullopt;
-    double best = std::numeric_limits<double>::infinity();
-    bool moving = false;
-    for (std::size_t i = frameStart[static_cast<std::size_t>(f)]; i < frameStart[static_cast<std::size_t>(f) + 1]; ++i)
-    {
-      const TGroundTruthPoint& p = points[order[i]];
-      if (const double dist = std::hypot(p.uv.x() - d.uv.x(), p.uv.y() - d.uv.y()); dist < best)
-        best = dist, moving = p.moving;
-    }
-    if (!(best <= radiusPx)) return std::nullopt;
-    return moving ? EMotionClass::Dynamic : EMotionClass::Static;
+    const TGroundTruthPoint* p = byFrame.nearest(d.timestamp, d.uv, radiusPx, maxDt);
+    if (!p) return std::nullopt;
+    return p->moving ? EMotionClass::Dynamic : EMotionClass::Static;
   });
+}
+
+std::vector<TTrackSample> readTracksCsv(const std::string& path)
+{
+  detail::CTableReader r(path, detail::CTableReader::ESeparator::Comma, "tracks file");
+  std::vector<TTrackSample> out;
+  static const std::vector<std::string> kHead{"timestamp", "feature_id", "x", "y", "z", "u", "v"};
+  if (!r.next()) throw std::runtime_error(path + ": empty file (expected a header 'timestamp,feature_id,x,y,z,u,v')");
+  if (r.fields().size() < kHead.size() || !std::equal(kHead.begin(), kHead.end(), r.fields().begin()))
+    r.fail("expected a header starting 'timestamp,feature_id,x,y,z,u,v'");
+  const std::size_t nCols = r.fields().size();
+  const auto column = [&](const std::string& name) {
+    const auto it = std::find(r.fields().begin() + static_cast<std::ptrdiff_t>(kHead.size()), r.fields().end(), name);
+    return it == r.fields().end() ? std::size_t{0} : static_cast<std::size_t>(it - r.fields().begin());
+  };
+  const std::size_t iRange = column("range"), iSigma = column("range_rel_sigma");
+  while (r.next())
+  {
+    if (r.fields().size() != nCols)
+      r.fail("expected " + std::to_string(nCols) + " fields like the header, got " + std::to_string(r.fields().size()));
+    TTrackSample t;
+    if (iRange) t.range = r.number(iRange, "range");
+    if (iSigma) t.rangeRelSigma = r.number(iSigma, "range_rel_sigma");
+    t.timestamp = r.number(0, "timestamp");
+    t.featureId = r.integer(1, "feature_id");
+    t.p_W = Vec3(r.number(2, "x"), r.number(3, "y"), r.number(4, "z"));
+    t.uv = Vec2(r.number(5, "u"), r.number(6, "v"));
+    out.push_back(t);
+  }
+  return out;
+}
+
+std::string TTrackErrorResult::summary() const
+{
+  std::ostringstream s;
+  s << "track samples : " << samples << " (" << tracks << " tracks)\n"
+    << "on a moving ground-truth point : " << matched << " samples of " << matchedTracks << " tracks\n"
+    << "on a static ground-truth point : " << onStatic << "\n"
+    << "no ground-truth point near     : " << unmatched << "\n";
+  if (std::isfinite(maxRelativeSigma))
+    s << "left out (range_rel_sigma > " << maxRelativeSigma << "): " << uncertain << " of the moving-point samples\n";
+  if (matched > 0)
+    s << "position error (after the camera's alignment): RMS " << rmse << ", median " << median << ", max " << max
+      << " (ground-truth units)\n";
+  if (matched > 0 && std::isfinite(medianRange))
+    s << "median distance of those points from the camera: " << medianRange << "\n";
+  return s.str();
+}
+
+TTrackErrorResult trackErrorAgainstPoints(const std::vector<TTrackSample>& samples,
+                                          const std::vector<TGroundTruthPoint>& points, const TSim3& alignment,
+                                          double radiusPx, double maxDt, double maxRelativeSigma)
+{
+  if (!(radiusPx >= 0)) throw std::invalid_argument("trackErrorAgainstPoints: radius must be >= 0 px");
+  if (!(maxRelativeSigma > 0)) throw std::invalid_argument("trackErrorAgainstPoints: relative sigma limit must be > 0");
+  const CPointsByFrame byFrame(points);
+  TTrackErrorResult r;
+  r.samples = samples.size();
+  r.maxRelativeSigma = maxRelativeSigma;
+  std::set<std::int64_t> all, matchedIds;
+  std::vector<double> err, range;
+  for (const TTrackSample& t : samples)
+  {
+    all.insert(t.featureId);
+    const TGroundTruthPoint* p = byFrame.nearest(t.timestamp, t.uv, radiusPx, maxDt);
+    if (!p)
+      ++r.unmatched;
+    else if (!p->moving)
+      ++r.onStatic;
+    else if (std::isfinite(maxRelativeSigma) && !(t.rangeRelSigma <= maxRelativeSigma))
+      ++r.uncertain;
+    else
+    {
+      err.push_back((alignment.transform(t.p_W) - p->p_W).norm());
+      if (std::isfinite(t.range)) range.push_back(alignment.s * t.range);
+      matchedIds.insert(t.featureId);
+    }
+  }
+  r.tracks = all.size();
+  r.matched = err.size();
+  r.matchedTracks = matchedIds.size();
+  if (!err.empty())
+  {
+    double sq = 0;
+    for (const double e : err) sq += e * e;
+    r.rmse = std::sqrt(sq / static_cast<double>(err.size()));
+    r.max = *std::max_element(err.begin(), err.end());
+    std::nth_element(err.begin(), err.begin() + static_cast<std::ptrdiff_t>(err.size() / 2), err.end());
+    r.median = err[err.size() / 2];
+  }
+  if (!range.empty())
+  {
+    std::nth_element(range.begin(), range.begin() + static_cast<std::ptrdiff_t>(range.size() / 2), range.end());
+    r.medianRange = range[range.size() / 2];
+  }
+  return r;
 }
 }  // namespace immslam::eval

@@ -1,6 +1,8 @@
 /* imm-monoslam — internal text-table reader of the evaluation's file readers. */
 #include "table_reader.h"
 
+#include <immslam/math/text.h>
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -13,14 +15,6 @@ namespace immslam::eval::detail
 namespace
 {
 bool isBlank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
-std::string trim(const std::string& s)
-{
-  std::size_t a = 0, b = s.size();
-  while (a < b && isBlank(s[a])) ++a;
-  while (b > a && isBlank(s[b - 1])) --b;
-  return s.substr(a, b - a);
-}
 
 std::vector<std::string> splitWhitespace(const std::string& line)
 {
@@ -55,18 +49,18 @@ std::vector<std::string> splitCsv(const std::string& line)
       else
         cur += c;
     }
-    else if (c == '"' && trim(cur).empty())
+    else if (c == '"' && math::trim(cur).empty())
       quoted = wasQuoted = true, cur.clear();
     else if (c == ',')
     {
-      out.push_back(wasQuoted ? cur : trim(cur));
+      out.push_back(wasQuoted ? cur : math::trim(cur));
       cur.clear();
       wasQuoted = false;
     }
     else if (!(wasQuoted && isBlank(c)))
       cur += c;
   }
-  out.push_back(wasQuoted ? cur : trim(cur));
+  out.push_back(wasQuoted ? cur : math::trim(cur));
   return out;
 }
 }  // namespace
@@ -92,7 +86,7 @@ bool CTableReader::next()
   while (std::getline(m_in, line))
   {
     ++m_lineNo;
-    const std::string t = trim(line);
+    const std::string t = math::trim(line);
     if (t.empty() || t.front() == '#') continue;
     m_fields = m_sep == ESeparator::Comma ? splitCsv(t) : splitWhitespace(t);
     return true;

@@ -228,3 +228,76 @@ TEST(ClassificationTruth, NearestGroundTruthPointWithinRadius)
   writeText(p, "1000.0 0 static 1 2 3 4\n");
   EXPECT_THROW(readPointsGroundTruth(p), std::runtime_error);
 }
+
+TEST(TrackError, KnownErrorsAfterTheAlignmentAndAssociationByPixel)
+{
+  // The estimate's world is the ground truth's shrunk by 2, turned 90 deg about z and shifted:
+  // S maps it back exactly; the tracked positions carry known errors (in ground-truth units).
+  TSim3 S;
+  S.s = 2;
+  S.R << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+  S.t = Vec3(1, -2, 0.5);
+  const TSim3 Sinv = S.inverse();
+  std::vector<TGroundTruthPoint> pts;
+  auto gtPoint = [&](double t, std::int64_t id, bool moving, const Vec3& p, double u, double v) {
+    TGroundTruthPoint g;
+    g.timestamp = t, g.pointId = id, g.moving = moving, g.p_W = p, g.uv = Vec2(u, v);
+    pts.push_back(g);
+  };
+  std::vector<TTrackSample> tracks;
+  auto sample = [&](double t, std::int64_t id, const Vec3& pW_gt, double u, double v) {
+    TTrackSample s;
+    s.timestamp = t, s.featureId = id, s.p_W = Sinv.transform(pW_gt), s.uv = Vec2(u, v);
+    tracks.push_back(s);
+  };
+  for (int k = 0; k < 3; ++k)
+  {
+    const double t = 10 + k / 15.0;
+    gtPoint(t, 1, true, Vec3(k, 1, 5), 100 + 10 * k, 50);
+    gtPoint(t, 2, false, Vec3(-1, 0, 4), 200, 120);
+    // Track 7 on the moving point, position errors 0.3, 0.4, 0 (x offsets in gt units).
+    sample(t, 7, Vec3(k + (k == 0 ? 0.3 : k == 1 ? 0.4 : 0.0), 1, 5), 100 + 10 * k + 1, 50);
+  }
+  sample(10, 8, Vec3(-1, 0, 4), 201, 121);   // on the static point
+  sample(10, 9, Vec3(0, 0, 0), 300, 200);    // far from every point
+  sample(99, 9, Vec3(0, 0, 0), 100, 50);     // no ground-truth frame at that time
+  const TTrackErrorResult r = trackErrorAgainstPoints(tracks, pts, S);
+  EXPECT_EQ(r.samples, 6u);
+  EXPECT_EQ(r.tracks, 3u);
+  EXPECT_EQ(r.matched, 3u);
+  EXPECT_EQ(r.matchedTracks, 1u);
+  EXPECT_EQ(r.onStatic, 1u);
+  EXPECT_EQ(r.unmatched, 2u);
+  EXPECT_NEAR(r.rmse, std::sqrt((0.09 + 0.16) / 3), 1e-12);
+  EXPECT_NEAR(r.median, 0.3, 1e-12);
+  EXPECT_NEAR(r.max, 0.4, 1e-12);
+  EXPECT_NE(r.summary().find("RMS"), std::string::npos);
+  // A radius below the 1 px offset leaves the moving rows unmatched.
+  EXPECT_EQ(trackErrorAgainstPoints(tracks, pts, S, 0.5).matched, 0u);
+  EXPECT_THROW(trackErrorAgainstPoints(tracks, pts, S, -1), std::invalid_argument);
+}
+
+TEST(TrackError, ReadsTracksCsvAndNamesBadLines)
+{
+  const std::string p = tempPath("tracks.csv");
+  writeText(p, "timestamp,feature_id,x,y,z,u,v,vx,vy,vz\n1.5,4,0.1,0.2,3,10.5,20,0,0,0\n2,4,0.2,0.2,3,11,20,0,0,0\n");
+  const auto t = readTracksCsv(p);
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_EQ(t[0].featureId, 4);
+  EXPECT_DOUBLE_EQ(t[0].timestamp, 1.5);
+  EXPECT_DOUBLE_EQ(t[0].p_W.z(), 3);
+  EXPECT_DOUBLE_EQ(t[0].uv.x(), 10.5);
+  writeText(p, "timestamp,feature_id,x,y,z,u,v\n1,2,3,x,5,6,7\n");
+  try
+  {
+    readTracksCsv(p);
+    FAIL() << "no throw";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find(p + ":2"), std::string::npos) << e.what();
+  }
+  writeText(p, "time,id\n");
+  EXPECT_THROW(readTracksCsv(p), std::runtime_error);
+  EXPECT_THROW(readTracksCsv(tempPath("missing_tracks.csv")), std::runtime_error);
+}

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 
 using namespace immslam;
@@ -40,7 +41,8 @@ TEST(SlamEvalApp, DispatchOldFormAndUsage)
 
   std::string out, outOld, err;
   EXPECT_EQ(run({"--help"}, &out), 0);
-  for (const char* c : {"ate", "segmentation", "classification", "nis"}) EXPECT_NE(out.find(c), std::string::npos) << c;
+  for (const char* c : {"ate", "segmentation", "classification", "tracks", "nis"})
+    EXPECT_NE(out.find(c), std::string::npos) << c;
   EXPECT_EQ(run({}, nullptr, &err), 2);
   EXPECT_NE(err.find("no command"), std::string::npos);
 
@@ -54,7 +56,7 @@ TEST(SlamEvalApp, DispatchOldFormAndUsage)
   EXPECT_EQ(run({"--frobnicate", g, g}), 2);
   EXPECT_EQ(run({"ate", tempPath("none.txt"), g}, nullptr, &err), 1);
 
-  for (const char* c : {"segmentation", "classification", "nis"})
+  for (const char* c : {"segmentation", "classification", "tracks", "nis"})
   {
     EXPECT_EQ(run({c, "--help"}, &out), 0) << c;
     EXPECT_NE(out.find(std::string("Usage: slam-eval ") + c), std::string::npos) << out;
@@ -81,4 +83,42 @@ TEST(SlamEvalApp, DispatchOldFormAndUsage)
   writeText(labels, "5.0 stationary\n");
   EXPECT_EQ(run({"segmentation", probs, labels}, nullptr, &err), 1);  // no common timestamp
   EXPECT_NE(err.find(probs), std::string::npos) << err;
+}
+
+TEST(SlamEvalApp, TracksAgainstPointsAfterTheCameraAlignment)
+{
+  // Camera ground truth and an estimate at half the scale: the Sim(3) of the cameras maps the
+  // tracked positions onto the moving point exactly (error 0), the static row is counted apart.
+  TTrajectory gt, est;
+  for (int k = 0; k < 10; ++k)
+  {
+    const Vec3 p(0.1 * k, 0.02 * k * k, 0.05 * (k % 3));
+    gt.push_back(TStampedPose{k / 15.0, p, Vec4(1, 0, 0, 0)});
+    est.push_back(TStampedPose{k / 15.0, 0.5 * p, Vec4(1, 0, 0, 0)});
+  }
+  const std::string g = tempPath("tr_gt.txt"), e = tempPath("tr_est.txt"), pts = tempPath("tr_points.txt"),
+                    tr = tempPath("tr_tracks.csv");
+  writeTumTrajectory(gt, g);
+  writeTumTrajectory(est, e);
+  std::ostringstream ps, ts;
+  ps << std::setprecision(17) << "# timestamp point_id kind x y z u v\n";
+  ts << std::setprecision(17) << "timestamp,feature_id,x,y,z,u,v\n";
+  for (int k = 0; k < 10; ++k)
+  {
+    ps << k / 15.0 << " 3 moving " << 1 + 0.1 * k << " 2 6 " << 100 + k << " 80\n" << k / 15.0 << " 4 static 0 0 5 10 10\n";
+    ts << k / 15.0 << ",12," << 0.5 * (1 + 0.1 * k) << ",1,3," << 100 + k << ",80.5\n";
+  }
+  ts << 0.0 << ",13,0,0,2.5,10,11\n";
+  writeText(pts, ps.str());
+  writeText(tr, ts.str());
+  std::string out, err;
+  ASSERT_EQ(run({"tracks", tr, pts, "--est", e, "--gt", g}, &out, &err), 0) << err;
+  EXPECT_NE(out.find("on a moving ground-truth point : 10 samples of 1 tracks"), std::string::npos) << out;
+  EXPECT_NE(out.find("on a static ground-truth point : 1"), std::string::npos) << out;
+  const auto at = out.find("RMS ");
+  ASSERT_NE(at, std::string::npos) << out;
+  EXPECT_LT(std::stod(out.substr(at + 4)), 1e-9) << out;
+  EXPECT_EQ(run({"tracks", tr, pts, "--est", e}, nullptr, &err), 2);
+  EXPECT_NE(err.find("--gt"), std::string::npos) << err;
+  EXPECT_EQ(run({"tracks", tr, pts, "--est", e, "--gt", tempPath("none.txt")}, nullptr, &err), 1);
 }

@@ -2,6 +2,7 @@
 #include <immslam/camera/CCameraModel.h>
 #include <immslam/eval/TTrajectory.h>
 #include <immslam/io/CDatasetFolderSource.h>
+#include <immslam/math/text.h>
 
 #include "image_convert.h"
 
@@ -18,17 +19,6 @@ namespace fs = std::filesystem;
 
 namespace immslam::io
 {
-namespace
-{
-std::string trim(const std::string& s)
-{
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return {};
-  const auto e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
-}
-}  // namespace
-
 std::vector<TDatasetEntry> parseRgbTxt(std::istream& in, const std::string& fileLabel)
 {
   std::vector<TDatasetEntry> out;
@@ -37,7 +27,7 @@ std::vector<TDatasetEntry> parseRgbTxt(std::istream& in, const std::string& file
   while (std::getline(in, raw))
   {
     ++lineNo;
-    const std::string line = trim(raw);
+    const std::string line = math::trim(raw);
     if (line.empty() || line[0] == '#') continue;
     TDatasetEntry e;
     e.line = lineNo;
@@ -50,7 +40,7 @@ std::vector<TDatasetEntry> parseRgbTxt(std::istream& in, const std::string& file
       continue;
     }
     const std::string stamp = line.substr(0, sep);
-    e.path = trim(line.substr(sep));  // the rest of the line: paths may contain spaces
+    e.path = math::trim(line.substr(sep));  // the rest of the line: paths may contain spaces
     errno = 0;
     char* end = nullptr;
     const double t = std::strtod(stamp.c_str(), &end);

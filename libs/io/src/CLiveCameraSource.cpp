@@ -2,6 +2,7 @@
 #include <immslam/camera/mrpt_camera.h>
 #include <immslam/io/CLiveCameraSource.h>
 #include <immslam/io/CRawlogRecorder.h>
+#include <immslam/math/text.h>
 
 #include "image_convert.h"
 
@@ -31,20 +32,6 @@ namespace immslam::io
 {
 namespace
 {
-std::string lower(std::string s)
-{
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
-
-std::string trim(const std::string& s)
-{
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return {};
-  const auto e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
-}
-
 /** The grabber types CCameraSensor::initialize() knows (MRPT 2.5.8). */
 const std::vector<std::string>& knownGrabbers()
 {
@@ -392,7 +379,7 @@ CLiveCameraSource::CLiveCameraSource(const std::string& iniPath, const std::stri
     file.getAllSections(sections);
     // MRPT's ini parser compares section names case-insensitively.
     if (std::none_of(sections.begin(), sections.end(),
-                     [&](const std::string& s) { return lower(s) == lower(section); }))
+                     [&](const std::string& s) { return math::toLower(s) == math::toLower(section); }))
     {
       std::string list;
       for (const auto& s : sections) list += (list.empty() ? "" : ", ") + s;
@@ -419,7 +406,7 @@ CLiveCameraSource::CLiveCameraSource(const std::string& iniPath, const std::stri
   cfg.getAllKeys(section, keys);
   for (const auto& k : keys)
   {
-    const std::string lk = lower(k);
+    const std::string lk = math::toLower(k);
     if (lk == "left_filename_format" || lk == "right_filename_format")
       throw std::runtime_error(m.err("key '" + k + "' is not read by MRPT's CCameraSensor (its header " +
                                      "documents it, its code reads '" + lk.substr(0, lk.find('_')) +
@@ -427,7 +414,7 @@ CLiveCameraSource::CLiveCameraSource(const std::string& iniPath, const std::stri
     if (m.opts.strictKeys && !isKnownKey(lk))
       throw std::runtime_error(m.err("unknown key '" + k + "' (not read by MRPT's CCameraSensor)"));
   }
-  m.grabber = lower(trim(cfg.read_string(section, "grabber_type", "")));
+  m.grabber = math::toLower(math::trim(cfg.read_string(section, "grabber_type", "")));
   if (const auto sp = m.grabber.find_first_of(" \t"); sp != std::string::npos) m.grabber.resize(sp);
   if (m.grabber.empty())
     throw std::runtime_error(m.err("key grabber_type is missing (opencv, ffmpeg, image_dir, rawlog, ...)"));
@@ -456,7 +443,7 @@ CLiveCameraSource::CLiveCameraSource(const std::string& iniPath, const std::stri
 
   // Grabber-specific checks (MRPT would fail later, or silently use a default).
   auto requireKey = [&](const std::string& key) {
-    const std::string v = trim(cfg.read_string(section, key, ""));
+    const std::string v = math::trim(cfg.read_string(section, key, ""));
     if (v.empty())
       throw std::runtime_error(m.err("key " + key + " is missing (needed by grabber_type = " + m.grabber + ")"));
     return v;
@@ -491,7 +478,7 @@ CLiveCameraSource::CLiveCameraSource(const std::string& iniPath, const std::stri
     if (m.url.find('%') != std::string::npos)
       throw std::runtime_error(m.err("image_dir_url must not contain '%' (MRPT formats it): " + m.url));
     cfg.write(section, "image_dir_url", m.url);
-    const std::string lf = trim(cfg.read_string(section, "left_format", ""));
+    const std::string lf = math::trim(cfg.read_string(section, "left_format", ""));
     if (lf.empty())
       throw std::runtime_error(
           m.err("key left_format is missing (a printf pattern such as img_%05d.png; MRPT's default "
@@ -504,7 +491,7 @@ CLiveCameraSource::CLiveCameraSource(const std::string& iniPath, const std::stri
     {
       throw std::runtime_error(m.err("left_format: " + std::string(e.what())));
     }
-    const std::string rf = trim(cfg.read_string(section, "right_format", ""));
+    const std::string rf = math::trim(cfg.read_string(section, "right_format", ""));
     if (!rf.empty())
     {
       try

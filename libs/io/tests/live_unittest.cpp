@@ -31,6 +31,8 @@
 #include <thread>
 #include <unistd.h>
 
+#include "temp_dir.h"
+
 namespace fs = std::filesystem;
 using namespace immslam;
 using namespace immslam::io;
@@ -39,28 +41,10 @@ namespace
 {
 const std::string kShared = IMMSLAM_SHARED_DATA_DIR;
 
-/** A fresh temporary folder, removed at the end of the test. */
-class TempDir
+/** The io tests' temporary folder, named after this test program. */
+struct TempDir : test::TempDir
 {
- public:
-  TempDir()
-  {
-    static int counter = 0;
-    m_path = fs::temp_directory_path() /
-             ("immslam_live_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::remove_all(m_path);
-    fs::create_directories(m_path);
-  }
-  ~TempDir()
-  {
-    std::error_code ec;
-    fs::remove_all(m_path, ec);
-  }
-  std::string str() const { return m_path.string(); }
-  std::string operator/(const std::string& s) const { return (m_path / s).string(); }
-
- private:
-  fs::path m_path;
+  TempDir() : test::TempDir("live_test") {}
 };
 
 void writeText(const std::string& path, const std::string& text)

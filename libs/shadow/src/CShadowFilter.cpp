@@ -316,6 +316,8 @@ TTrackPoint CShadowFilter::trackPoint(const TShadowFeature& f) const
   t.measured = f.measured;
   t.uv = f.measured ? f.uv : f.predicted;
   t.inverseDistance = f.ekf.x[kW];
+  t.distanceRelativeStd =
+      std::sqrt(std::max(f.ekf.P(kW, kW), 0.0)) / std::max(f.ekf.x[kW], m_opts.min_inverse_distance);
   return t;
 }
 

@@ -1,5 +1,6 @@
 /* imm-monoslam — scenario ini parsing with strict key validation (see TScenario.h). */
 #include <immslam/sim/TScenario.h>
+#include <immslam/math/text.h>
 
 #include <mrpt/config/CConfigFileMemory.h>
 
@@ -18,20 +19,6 @@ namespace immslam::sim
 {
 namespace
 {
-std::string lower(std::string s)
-{
-  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-std::string trim(const std::string& s)
-{
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return {};
-  const auto e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
-}
-
 /** Shortest decimal text that reads back to exactly v. */
 std::string fmt(double v)
 {
@@ -108,7 +95,7 @@ class CSectionReader
     std::string v = m_cfg.read_string(m_section, key, "");
     const auto c = v.find_first_of("#;");
     if (c != std::string::npos) v = v.substr(0, c);
-    return trim(v);
+    return math::trim(v);
   }
 
   std::string str(const std::string& key, const std::string& def) const
@@ -143,7 +130,7 @@ class CSectionReader
   bool boolean(const std::string& key, bool def) const
   {
     if (!has(key)) return def;
-    const std::string v = lower(raw(key));
+    const std::string v = math::toLower(raw(key));
     if (v == "true" || v == "1" || v == "yes" || v == "on") return true;
     if (v == "false" || v == "0" || v == "no" || v == "off") return false;
     fail(key, raw(key), "expected true or false");
@@ -196,9 +183,9 @@ std::vector<TMotionSegment> parseSegments(const CSectionReader& r, const std::st
     std::istringstream is(item);
     std::string type, dur, extra;
     if (!(is >> type >> dur) || (is >> extra))
-      r.fail(key, v, "each comma-separated item must be 'TYPE SECONDS' (TYPE stationary|rotation|general), got '" + trim(item) + "'");
+      r.fail(key, v, "each comma-separated item must be 'TYPE SECONDS' (TYPE stationary|rotation|general), got '" + math::trim(item) + "'");
     TMotionSegment s;
-    s.type = motionLabelFromString(lower(type), r.origin() + ": [" + r.section() + "] " + key);
+    s.type = motionLabelFromString(math::toLower(type), r.origin() + ": [" + r.section() + "] " + key);
     s.duration_s = r.parseNumber(key, dur, v);
     segs.push_back(s);
   }
@@ -257,7 +244,7 @@ TScenario TScenario::fromConfig(const mrpt::config::CConfigFileBase& cfg, const 
   std::map<std::string, std::pair<std::string, std::set<std::string>>> present;  // lower -> (name, keys)
   for (const auto& sec : sections)
   {
-    const std::string sl = lower(trim(sec));
+    const std::string sl = math::toLower(math::trim(sec));
     if (sl.empty()) continue;
     std::vector<std::string> keys;
     cfg.getAllKeys(sec, keys);
@@ -270,7 +257,7 @@ TScenario TScenario::fromConfig(const mrpt::config::CConfigFileBase& cfg, const 
     std::set<std::string> ks;
     for (const auto& k : keys)
     {
-      const std::string kl = lower(trim(k));
+      const std::string kl = math::toLower(math::trim(k));
       if (!it->second.count(kl))
       {
         std::string allowed;
@@ -346,7 +333,7 @@ TScenario TScenario::fromConfig(const mrpt::config::CConfigFileBase& cfg, const 
     TMovingObjectSpec o;
     o.id = id;
     o.size = r.vec<3>("size", o.size);
-    const std::string path = lower(r.str("path", "linear"));
+    const std::string path = math::toLower(r.str("path", "linear"));
     if (path == "linear")
       o.path = EObjectPath::Linear;
     else if (path == "circular")
@@ -425,7 +412,7 @@ TScenario TScenario::loadString(const std::string& text, const std::string& orig
     const auto eq = o.find('=');
     if (dot == std::string::npos || eq == std::string::npos || dot > eq || dot == 0 || eq == dot + 1)
       throw std::runtime_error("bad override '" + o + "': expected SECTION.KEY=VALUE");
-    cfg.write(trim(o.substr(0, dot)), trim(o.substr(dot + 1, eq - dot - 1)), trim(o.substr(eq + 1)));
+    cfg.write(math::trim(o.substr(0, dot)), math::trim(o.substr(dot + 1, eq - dot - 1)), math::trim(o.substr(eq + 1)));
   }
   return fromConfig(cfg, origin);
 }

@@ -2,6 +2,7 @@
  * the renderer's object masks or the projected ground-truth points of a simulated data set. */
 #pragma once
 
+#include <immslam/eval/alignment.h>
 #include <immslam/eval/classification.h>
 #include <immslam/math/types.h>
 
@@ -9,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <iosfwd>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -117,4 +119,56 @@ std::vector<TGroundTruthPoint> readPointsGroundTruth(const std::string& path);
 TClassificationResult classificationAgainstPoints(const std::vector<TClassificationDecision>& decisions,
                                                   const std::vector<TGroundTruthPoint>& points,
                                                   double radiusPx = 3.0, double maxDt = 1e-4);
+
+/** One tracked position of a dynamic feature (a row of tracks.csv). */
+struct TTrackSample
+{
+  double timestamp = 0;      ///< frame time (s)
+  std::int64_t featureId = 0;  ///< the feature's id
+  Vec3 p_W = Vec3::Zero();   ///< estimated world position (the estimate's frame and scale)
+  Vec2 uv = Vec2::Zero();    ///< measured pixel in that frame
+  /** Distance from the camera and its relative 1-sigma (columns `range`, `range_rel_sigma`; NaN
+   * when the file has no such column): small for a located point, large for a bearing of unknown
+   * depth. */
+  double range = std::numeric_limits<double>::quiet_NaN();
+  double rangeRelSigma = std::numeric_limits<double>::quiet_NaN();  ///< see range
+};
+
+/** Reads tracks.csv: header starting `timestamp,feature_id,x,y,z,u,v`, optional columns `range`
+ * and `range_rel_sigma` anywhere after them (other columns ignored).
+ * \throws std::runtime_error naming `file:line` for a bad header, a missing field or a value that
+ *         is not a number, and naming the file when it cannot be opened. */
+std::vector<TTrackSample> readTracksCsv(const std::string& path);
+
+/** Tracked positions of dynamic features against the moving ground-truth points. */
+struct TTrackErrorResult
+{
+  std::size_t samples = 0;        ///< rows read
+  std::size_t tracks = 0;         ///< distinct feature ids
+  std::size_t matched = 0;        ///< rows whose nearest ground-truth point is a moving one
+  std::size_t matchedTracks = 0;  ///< distinct feature ids among them
+  std::size_t onStatic = 0;       ///< rows whose nearest ground-truth point is static
+  std::size_t unmatched = 0;      ///< rows with no ground-truth point within the radius
+  std::size_t uncertain = 0;      ///< moving-point rows left out: relative sigma above the limit (or unknown)
+  double maxRelativeSigma = std::numeric_limits<double>::infinity();  ///< the limit used
+  double rmse = 0;                ///< RMS of |S(p_est) - p_gt| over the matched rows kept (gt units)
+  double median = 0;              ///< median of the same
+  double max = 0;                 ///< largest
+  double medianRange = std::numeric_limits<double>::quiet_NaN();  ///< median distance from the camera of those rows (gt units; NaN without the column)
+  /** Multi-line report. */
+  std::string summary() const;
+};
+
+/** Position error of tracked dynamic features: each row is associated, like a decision in
+ * classificationAgainstPoints(), with the ground-truth point nearest to its pixel in its frame
+ * (within radiusPx, frames within maxDt); for a moving point the error is |S(p_W) - p_gt| where S
+ * maps the estimate's world frame onto the ground truth's (the Sim(3) of the camera trajectory's
+ * alignment, computeAte().sim3()). With a finite maxRelativeSigma, rows on a moving point whose
+ * TTrackSample::rangeRelSigma exceeds it (or is unknown) are counted as uncertain and left out:
+ * a bearing-only track locates its point only once the motion has given it parallax.
+ * \throws std::invalid_argument if radiusPx is negative or NaN, or maxRelativeSigma is NaN or <= 0. */
+TTrackErrorResult trackErrorAgainstPoints(const std::vector<TTrackSample>& samples,
+                                          const std::vector<TGroundTruthPoint>& points, const TSim3& alignment,
+                                          double radiusPx = 3.0, double maxDt = 1e-4,
+                                          double maxRelativeSigma = std::numeric_limits<double>::infinity());
 }  // namespace immslam::eval

@@ -97,6 +97,9 @@ struct TTrackPoint
   Vec2 uv = Vec2::Zero();       ///< measured pixel, or the prediction when not measured
   bool measured = false;        ///< found in this frame
   double inverseDistance = 0;   ///< the EKF's w (0: at infinity; p_W then uses w clamped)
+  /** sigma_w / w: the relative 1-sigma of the distance (first order), from the EKF's own w (not
+   * clamped, so large for a bearing of unknown depth, where cov_W is not meaningful in depth). */
+  double distanceRelativeStd = 0;
 };
 
 /** Every shadow feature in this frame (for overlays). */
