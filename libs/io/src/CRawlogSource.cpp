@@ -328,9 +328,11 @@ ENextStatus CRawlogSource::next(TFrame& frame, std::string& why)
     f.index = index;
     f.origin = origin;
     std::string sub;
-    if (img->image.isExternallyStored())
+    // External image <=> a file name. (Not isExternallyStored(): MRPT deserializes that flag from a
+    // raw byte into a bool, and a corrupt byte such as 129 makes reading it undefined behaviour;
+    // found by fuzzing, tests/fuzz/regressions/rawlog/image_external_flag_129.rawlog.)
+    if (const std::string name = img->image.getExternalStorageFile(); !name.empty())
     {
-      const std::string name = img->image.getExternalStorageFile();
       std::string tried;
       const std::string file = m.resolveExternal(name, tried);
       if (file.empty())
