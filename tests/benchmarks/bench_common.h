@@ -5,8 +5,11 @@
 
 #include <benchmark/benchmark.h>
 
+#include <Eigen/Core>
+
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -50,6 +53,29 @@ inline void addMachineContext()
 #else
   benchmark::AddCustomContext("immslam_build", "assertions on (Debug-like: figures not representative)");
 #endif
+}
+/** Test data of the micro-benchmarks: a symmetric positive definite P (n x n) with a correlated
+ * structure (sum of a diagonal and a low-rank part, like a SLAM covariance), cheap to build. */
+inline Eigen::MatrixXd makeCovariance(int n, unsigned seed)
+{
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd B(n, 8);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < 8; ++j) B(i, j) = 0.1 * g(rng);
+  Eigen::MatrixXd P = B * B.transpose();
+  P.diagonal().array() += 0.01;
+  return P;
+}
+
+/** A vector of n normal samples times scale. */
+inline Eigen::VectorXd makeVector(int n, unsigned seed, double scale)
+{
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  Eigen::VectorXd x(n);
+  for (int i = 0; i < n; ++i) x[i] = scale * g(rng);
+  return x;
 }
 }  // namespace immslam::bench
 

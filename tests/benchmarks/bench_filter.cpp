@@ -205,27 +205,8 @@ BENCHMARK(BM_FilterFrameXYZ)
     ->MinTime(1.0);
 
 // ---------------------------------------------------------------------------------------------
-// Test data of the micro-benchmarks: a symmetric positive definite P (n x n) with a correlated
-// structure (sum of a diagonal and a low-rank part, like a SLAM covariance), cheap to build.
-MatX makeCovariance(int n, unsigned seed)
-{
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g;
-  MatX B(n, 8);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < 8; ++j) B(i, j) = 0.1 * g(rng);
-  MatX P = B * B.transpose();
-  P.diagonal().array() += 0.01;
-  return P;
-}
-VecX makeVector(int n, unsigned seed, double scale)
-{
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g;
-  VecX x(n);
-  for (int i = 0; i < n; ++i) x[i] = scale * g(rng);
-  return x;
-}
+using immslam::bench::makeCovariance;
+using immslam::bench::makeVector;
 MatX imm7Transition()
 {
   MatX pi = MatX::Constant(7, 7, 0.005 / 6);

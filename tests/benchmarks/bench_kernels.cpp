@@ -37,25 +37,8 @@ using immslam::VecX;
 
 int stateDim(int nFeat) { return immslam::motion::kCamDim + 6 * nFeat; }
 
-MatX covariance(int n, unsigned seed)
-{
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g;
-  MatX B(n, 8);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < 8; ++j) B(i, j) = 0.1 * g(rng);
-  MatX P = B * B.transpose();
-  P.diagonal().array() += 0.01;
-  return P;
-}
-VecX vec(int n, unsigned seed, double scale)
-{
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g;
-  VecX x(n);
-  for (int i = 0; i < n; ++i) x[i] = scale * g(rng);
-  return x;
-}
+MatX covariance(int n, unsigned seed) { return immslam::bench::makeCovariance(n, seed); }
+VecX vec(int n, unsigned seed, double scale) { return immslam::bench::makeVector(n, seed, scale); }
 
 /** Copies the strictly lower triangle into the upper one in 32x32 tiles (both sides stay in L1). */
 void mirrorLowerBlocked(MatX& P)
