@@ -139,30 +139,42 @@ const TFeatures& features(int width)
   return cache.emplace(width, out).first->second;
 }
 
-// One active search: ZNCC of an 11x11 template at every position of the 95 % ellipse of S = s^2 I
-// whose area is `area` px^2 (pi * 5.991 * s^2), centred at the feature's pixel of the previous frame.
-void BM_SearchInEllipse(benchmark::State& st)
+/** What both search benchmarks search with: the templates of the features found in the first
+ * frame, and S = s^2 I whose 95 % ellipse has area `area` px^2 (pi * 5.991 * s^2). */
+struct TSearchSetup
 {
-  const int width = static_cast<int>(st.range(0));
-  const double area = static_cast<double>(st.range(1));
-  const auto& f = frames(width);
+  std::vector<cv::Mat> templ;
+  frontend::TSearchParams sp;
+  Mat2 S = Mat2::Identity();
+};
+bool searchSetup(benchmark::State& st, int width, double area, TSearchSetup& out)
+{
   const auto& feats = features(width);
   if (feats.patches.empty())
   {
     st.SkipWithError("no corners detected");
-    return;
+    return false;
   }
-  std::vector<cv::Mat> templ;
-  for (const auto& p : feats.patches) templ.push_back(p.originalTemplate());
-  frontend::TSearchParams sp;
-  const double s2 = area / (kPi * sp.gateChi2);
-  const Mat2 S = Mat2::Identity() * s2;
+  for (const auto& p : feats.patches) out.templ.push_back(p.originalTemplate());
+  out.S = Mat2::Identity() * (area / (kPi * out.sp.gateChi2));
+  return true;
+}
+
+// One active search: ZNCC of an 11x11 template at every position of the 95 % ellipse of S, centred
+// at the feature's pixel of the previous frame.
+void BM_SearchInEllipse(benchmark::State& st)
+{
+  const int width = static_cast<int>(st.range(0));
+  const auto& f = frames(width);
+  const auto& feats = features(width);
+  TSearchSetup su;
+  if (!searchSetup(st, width, static_cast<double>(st.range(1)), su)) return;
   frontend::TSearchWorkspace ws;
   std::size_t k = 0, found = 0, searches = 0, evaluated = 0;
   for (auto _ : st)
   {
-    const std::size_t i = k++ % templ.size();
-    const auto res = frontend::searchInEllipse(f.b, templ[i], feats.uv[i], S, sp, ws);
+    const std::size_t i = k++ % su.templ.size();
+    const auto res = frontend::searchInEllipse(f.b, su.templ[i], feats.uv[i], su.S, su.sp, ws);
     found += res.found ? 1 : 0;
     evaluated += res.evaluated;
     ++searches;
@@ -181,23 +193,15 @@ BENCHMARK(BM_SearchInEllipse)
 void BM_SearchInEllipseNoWorkspace(benchmark::State& st)
 {
   const int width = static_cast<int>(st.range(0));
-  const double area = static_cast<double>(st.range(1));
   const auto& f = frames(width);
   const auto& feats = features(width);
-  if (feats.patches.empty())
-  {
-    st.SkipWithError("no corners detected");
-    return;
-  }
-  std::vector<cv::Mat> templ;
-  for (const auto& p : feats.patches) templ.push_back(p.originalTemplate());
-  frontend::TSearchParams sp;
-  const Mat2 S = Mat2::Identity() * (area / (kPi * sp.gateChi2));
+  TSearchSetup su;
+  if (!searchSetup(st, width, static_cast<double>(st.range(1)), su)) return;
   std::size_t k = 0;
   for (auto _ : st)
   {
-    const std::size_t i = k++ % templ.size();
-    const auto res = frontend::searchInEllipse(f.b, templ[i], feats.uv[i], S, sp);
+    const std::size_t i = k++ % su.templ.size();
+    const auto res = frontend::searchInEllipse(f.b, su.templ[i], feats.uv[i], su.S, su.sp);
     benchmark::DoNotOptimize(res.score);
   }
   st.SetLabel(f.origin);
