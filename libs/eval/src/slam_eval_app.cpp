@@ -114,13 +114,18 @@ std::string classificationUsage(const std::string& prog)
 
 std::string tracksUsage(const std::string& prog)
 {
-  return "Usage: " + prog + " tracks.csv points_groundtruth.txt --est trajectory.txt --gt groundtruth.txt\n"
-         "       [--radius PX] [--max-dt S]\n"
-         "Position error of the tracked dynamic features (tracks.csv) against the moving ground-truth\n"
-         "points 'timestamp point_id kind x y z u v': each row is joined with the point nearest to its\n"
-         "pixel in its frame (within PX pixels, default 3); its estimated position is mapped onto the\n"
-         "ground truth by the Sim(3) that aligns the estimated camera trajectory (--est) with the true\n"
-         "one (--gt), the same alignment as 'ate'.\n"
+  return "Usage: " + prog + " tracks.csv (points_groundtruth.txt | RENDERED_FOLDER) --est trajectory.txt\n"
+         "       [--gt groundtruth.txt] [--radius PX] [--max-dt S] [--max-rel-sigma R]\n"
+         "Position error of the tracked dynamic features (tracks.csv) against the ground truth, after\n"
+         "mapping each estimated position onto the ground truth by the Sim(3) that aligns the estimated\n"
+         "camera trajectory (--est) with the true one (--gt), the same alignment as 'ate'.\n"
+         "  points_groundtruth.txt  moving ground-truth points 'timestamp point_id kind x y z u v': each\n"
+         "                row is joined with the point nearest to its pixel in its frame (within PX\n"
+         "                pixels, default 3)\n"
+         "  RENDERED_FOLDER  a dataset folder written by imm-render: the truth of a row is the surface\n"
+         "                point its measured pixel sees at its timestamp (ray cast through the folder's\n"
+         "                scenario.ini); rows on an object's silhouette (no single point) are left\n"
+         "                out; --gt defaults to the folder's groundtruth.txt\n"
          "With the column range_rel_sigma (the relative 1-sigma of the distance, which imm-monoslam\n"
          "writes) the error is also given over the located samples only, range_rel_sigma <= R\n"
          "(--max-rel-sigma R, default 0.5): a track starts as a bearing of unknown depth.\n"
@@ -188,24 +193,37 @@ int runClassification(const std::string& prog, const std::vector<std::string>& a
   return 0;
 }
 
-int runTracks(const std::string& prog, const std::vector<std::string>& args, std::ostream& out)
+int runTracks(const std::string& prog, const std::vector<std::string>& args, std::ostream& out,
+              const TSlamEvalTruthSources& truth)
 {
   const TParsed p = parse(args, 2, {"--est", "--gt", "--radius", "--max-dt", "--max-rel-sigma"});
   if (p.help) return out << tracksUsage(prog), 0;
-  requirePositional(p, 2, "tracks.csv points_groundtruth.txt");
-  const auto est = p.value("--est"), gt = p.value("--gt");
+  requirePositional(p, 2, "tracks.csv (points_groundtruth.txt | RENDERED_FOLDER)");
+  const std::string& truthPath = p.positional[1];
+  const bool rendered = std::filesystem::is_directory(truthPath);
+  if (rendered && !truth.renderedTrackTruth)
+    throw TUsageError("'" + truthPath + "' is a folder: this build has no renderer to compute its ground truth");
+  const auto est = p.value("--est");
+  const auto gt = p.value("--gt") ? p.value("--gt")
+                  : rendered      ? std::optional<std::string>((std::filesystem::path(truthPath) / "groundtruth.txt").string())
+                                  : std::nullopt;
   if (!est || !gt) throw TUsageError("--est trajectory.txt and --gt groundtruth.txt are needed (the alignment)");
   const double maxDt = p.value("--max-dt") ? parseNumber("--max-dt", *p.value("--max-dt"), 0, 1e9) : 1e-4;
-  const double radius = p.value("--radius") ? parseNumber("--radius", *p.value("--radius"), 0, 1e4) : 3;
+  // A rendered folder's truth is computed at each row's own pixel: a sub-pixel radius joins it.
+  const double radius = p.value("--radius") ? parseNumber("--radius", *p.value("--radius"), 0, 1e4) : rendered ? 0.5 : 3;
   const TAteResult ate = computeAte(readTumTrajectory(*est), readTumTrajectory(*gt), EAlignment::Sim3, 0.01);
   const auto samples = readTracksCsv(p.positional[0]);
   const double maxRel =
       p.value("--max-rel-sigma") ? parseNumber("--max-rel-sigma", *p.value("--max-rel-sigma"), 1e-12, 1e12) : 0.5;
-  const auto points = readPointsGroundTruth(p.positional[1]);
+  std::string truthReport;
+  const auto points = rendered ? truth.renderedTrackTruth(truthPath, samples, maxDt, truthReport)
+                               : readPointsGroundTruth(truthPath);
   const TTrackErrorResult r = trackErrorAgainstPoints(samples, points, ate.sim3(), radius, maxDt);
   out << "tracks       : " << p.positional[0] << "\n"
-      << "ground truth : points of " << p.positional[1] << " (radius " << radius << " px)\n"
-      << "alignment    : Sim(3) of " << *est << " onto " << *gt << " (" << ate.nPairs << " poses, scale " << ate.scale
+      << "ground truth : " << (rendered ? "surface points at the tracked pixels, rendered folder " : "points of ")
+      << truthPath << " (radius " << radius << " px)\n";
+  if (!truthReport.empty()) out << "               " << truthReport << "\n";
+  out << "alignment    : Sim(3) of " << *est << " onto " << *gt << " (" << ate.nPairs << " poses, scale " << ate.scale
       << "; camera ATE " << ate.rmse << ")\n"
       << r.summary();
   const bool hasSigma = std::any_of(samples.begin(), samples.end(), [](const TTrackSample& t) { return std::isfinite(t.rangeRelSigma); });
@@ -246,14 +264,15 @@ std::string slamEvalAppUsage(const std::string& prog)
          "      motion segmentation accuracy of the IMM bank (most probable family vs true label)\n"
          "  " + prog + " classification classifications.csv (--masks DATASET_FOLDER | --points\n"
          "      points_groundtruth.txt) [--radius PX]: static/dynamic confusion matrix\n"
-         "  " + prog + " tracks tracks.csv points_groundtruth.txt --est EST.txt --gt GT.txt\n"
+         "  " + prog + " tracks tracks.csv (points_groundtruth.txt | RENDERED_FOLDER) --est EST.txt [--gt GT.txt]\n"
          "      position error of the tracked moving points after the camera's Sim(3) alignment\n"
          "  " + prog + " nis searches.csv: NIS of the matches used in the update vs chi-square(2)\n"
          "  " + prog + " --help\n"
          "Exit status: 0 success, 1 bad input (the message names the file and line), 2 bad usage.\n";
 }
 
-int runSlamEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ostream& err)
+int runSlamEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ostream& err,
+                   const TSlamEvalTruthSources& truth)
 {
   const std::string prog =
       args.empty() || args[0].empty() ? "slam-eval" : std::filesystem::path(args[0]).filename().string();
@@ -280,7 +299,7 @@ int runSlamEvalApp(const std::vector<std::string>& args, std::ostream& out, std:
   {
     if (cmd == "segmentation") return runSegmentation(sub, args, out);
     if (cmd == "classification") return runClassification(sub, args, out);
-    if (cmd == "tracks") return runTracks(sub, args, out);
+    if (cmd == "tracks") return runTracks(sub, args, out, truth);
     return runNis(sub, args, out);
   }
   catch (const TUsageError& e)

@@ -121,4 +121,29 @@ TEST(SlamEvalApp, TracksAgainstPointsAfterTheCameraAlignment)
   EXPECT_EQ(run({"tracks", tr, pts, "--est", e}, nullptr, &err), 2);
   EXPECT_NE(err.find("--gt"), std::string::npos) << err;
   EXPECT_EQ(run({"tracks", tr, pts, "--est", e, "--gt", tempPath("none.txt")}, nullptr, &err), 1);
+
+  // A rendered folder: without a truth source (no renderer in this library) a usage error naming
+  // it; with one, its points are used, the report line printed and --gt defaults to the folder's.
+  const std::string folder = tempPath("tr_rendered");
+  std::filesystem::create_directories(folder);
+  writeTumTrajectory(gt, (std::filesystem::path(folder) / "groundtruth.txt").string());
+  EXPECT_EQ(run({"tracks", tr, folder, "--est", e}, nullptr, &err), 2);
+  EXPECT_NE(err.find(folder), std::string::npos) << err;
+  TSlamEvalTruthSources truth;
+  std::string seenFolder;
+  truth.renderedTrackTruth = [&](const std::string& f, const std::vector<TTrackSample>& samples, double,
+                                 std::string& report) {
+    seenFolder = f;
+    report = "fake truth";
+    std::vector<TGroundTruthPoint> pts;
+    for (const auto& t : samples)
+      if (t.featureId == 12) pts.push_back(TGroundTruthPoint{t.timestamp, 0, true, 2 * t.p_W, t.uv});
+    return pts;
+  };
+  std::ostringstream o, e2;
+  ASSERT_EQ(runSlamEvalApp({"slam-eval", "tracks", tr, folder, "--est", e}, o, e2, truth), 0) << e2.str();
+  EXPECT_EQ(seenFolder, folder);
+  EXPECT_NE(o.str().find("fake truth"), std::string::npos) << o.str();
+  EXPECT_NE(o.str().find("on a moving ground-truth point : 10 samples of 1 tracks"), std::string::npos) << o.str();
+  EXPECT_NE(o.str().find("no ground-truth point near     : 1"), std::string::npos) << o.str();
 }

@@ -1,24 +1,45 @@
-/* imm-monoslam — deterministic parallel-for over a persistent worker pool. */
+/* imm-monoslam — deterministic parallel-for over a persistent worker pool (dynamic scheduling). */
 #include <immslam/math/parallel.h>
 
 #include <algorithm>
+#include <chrono>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define IMMSLAM_CPU_RELAX() _mm_pause()
+#else
+#define IMMSLAM_CPU_RELAX() std::this_thread::yield()
+#endif
 
 namespace immslam::math
 {
 namespace
 {
-/** Chunk k of [begin, end) split into n nearly equal contiguous parts. */
-std::pair<int, int> chunk(int begin, int end, unsigned n, unsigned k)
+/** How long an idle thread polls before blocking: longer than the gap between the parallel
+ * sections of one frame (tens of microseconds), much shorter than a frame. */
+constexpr std::chrono::microseconds kSpin{100};
+
+/** Polls cond() for up to kSpin; true if it became true. */
+template <class Cond>
+bool spinUntil(Cond&& cond)
 {
-  const long len = end - begin;
-  return {begin + static_cast<int>(len * k / n), begin + static_cast<int>(len * (k + 1) / n)};
+  const auto t0 = std::chrono::steady_clock::now();
+  for (;;)
+  {
+    for (int k = 0; k < 64; ++k)
+    {
+      if (cond()) return true;
+      IMMSLAM_CPU_RELAX();
+    }
+    if (std::chrono::steady_clock::now() - t0 > kSpin) return cond();
+  }
 }
 }  // namespace
 
 CThreadPool::CThreadPool(unsigned nThreads)
 {
   m_nThreads = nThreads ? nThreads : std::max(1u, std::thread::hardware_concurrency());
-  for (unsigned i = 1; i < m_nThreads; ++i) m_workers.emplace_back([this, i] { workerLoop(i); });
+  for (unsigned i = 1; i < m_nThreads; ++i) m_workers.emplace_back([this] { workerLoop(); });
 }
 
 CThreadPool::~CThreadPool()
@@ -31,37 +52,53 @@ CThreadPool::~CThreadPool()
   for (auto& t : m_workers) t.join();
 }
 
-void CThreadPool::workerLoop(unsigned id)
+void CThreadPool::runIndices(std::uint32_t gen)
 {
-  unsigned seen = 0;
   for (;;)
   {
-    const std::function<void(int)>* job;
-    int b, e;
+    std::uint64_t t = m_ticket.load(std::memory_order_acquire);
+    int k;
+    do
     {
-      std::unique_lock<std::mutex> lk(m_mutex);
-      m_cvStart.wait(lk, [&] { return m_stop || m_generation != seen; });
-      if (m_stop) return;
-      seen = m_generation;
-      job = m_job;
-      b = m_begin;
-      e = m_end;
-    }
-    std::exception_ptr err;
+      if (static_cast<std::uint32_t>(t >> 32) != gen) return;  // a later job: not ours
+      k = static_cast<int>(t & 0xffffffffu);
+      if (k >= m_count.load(std::memory_order_relaxed)) return;
+    } while (!m_ticket.compare_exchange_weak(t, t + 1, std::memory_order_acq_rel, std::memory_order_acquire));
+    // Index k of generation gen is ours: the job cannot change before it is counted done.
     try
     {
-      const auto [cb, ce] = chunk(b, e, m_nThreads, id);
-      for (int i = cb; i < ce; ++i) (*job)(i);
+      (*m_job)(m_begin + k);
     }
     catch (...)
     {
-      err = std::current_exception();
-    }
-    {
       std::lock_guard<std::mutex> lk(m_mutex);
-      if (err && !m_error) m_error = err;
-      if (--m_pending == 0) m_cvDone.notify_one();
+      if (!m_error) m_error = std::current_exception();
     }
+    if (m_done.fetch_add(1, std::memory_order_acq_rel) + 1 == m_count.load(std::memory_order_relaxed))
+    {
+      std::lock_guard<std::mutex> lk(m_mutex);  // the caller may be about to sleep
+      m_cvDone.notify_one();
+    }
+  }
+}
+
+void CThreadPool::workerLoop()
+{
+  std::uint32_t seen = static_cast<std::uint32_t>(m_ticket.load() >> 32);
+  auto newJob = [&] {
+    return m_stop.load(std::memory_order_acquire) ||
+           static_cast<std::uint32_t>(m_ticket.load(std::memory_order_acquire) >> 32) != seen;
+  };
+  for (;;)
+  {
+    if (!spinUntil(newJob))
+    {
+      std::unique_lock<std::mutex> lk(m_mutex);
+      m_cvStart.wait(lk, newJob);
+    }
+    if (m_stop.load()) return;
+    seen = static_cast<std::uint32_t>(m_ticket.load(std::memory_order_acquire) >> 32);
+    runIndices(seen);
   }
 }
 
@@ -73,29 +110,32 @@ void CThreadPool::parallelFor(int begin, int end, const std::function<void(int)>
     for (int i = begin; i < end; ++i) f(i);
     return;
   }
+  const int count = end - begin;
+  m_job = &f;
+  m_begin = begin;
+  m_error = nullptr;
+  m_done.store(0, std::memory_order_relaxed);
+  m_count.store(count, std::memory_order_relaxed);
+  // Publishing the new generation (release) makes the job visible to whoever claims an index.
+  const auto gen = static_cast<std::uint32_t>((m_ticket.load(std::memory_order_relaxed) >> 32) + 1);
+  m_ticket.store(static_cast<std::uint64_t>(gen) << 32, std::memory_order_release);
   {
-    std::lock_guard<std::mutex> lk(m_mutex);
-    m_job = &f;
-    m_begin = begin;
-    m_end = end;
-    m_pending = m_nThreads - 1;
-    m_error = nullptr;
-    ++m_generation;
+    std::lock_guard<std::mutex> lk(m_mutex);  // no lost wake-up for a worker about to sleep
   }
   m_cvStart.notify_all();
+  runIndices(gen);
+  auto allDone = [&] { return m_done.load(std::memory_order_acquire) == count; };
+  if (!spinUntil(allDone))
+  {
+    std::unique_lock<std::mutex> lk(m_mutex);
+    m_cvDone.wait(lk, allDone);
+  }
   std::exception_ptr err;
-  try
   {
-    const auto [cb, ce] = chunk(begin, end, m_nThreads, 0);
-    for (int i = cb; i < ce; ++i) f(i);
+    std::lock_guard<std::mutex> lk(m_mutex);
+    err = m_error;
+    m_error = nullptr;
   }
-  catch (...)
-  {
-    err = std::current_exception();
-  }
-  std::unique_lock<std::mutex> lk(m_mutex);
-  m_cvDone.wait(lk, [&] { return m_pending == 0; });
-  if (!err) err = m_error;
   m_job = nullptr;
   if (err) std::rethrow_exception(err);
 }

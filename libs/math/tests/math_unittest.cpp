@@ -1,4 +1,5 @@
 /* Tests: quaternion Jacobians vs numerical, chi-square quantiles, log-likelihoods. */
+#include <cmath>
 #include <gtest/gtest.h>
 #include <immslam/math/bearing.h>
 #include <immslam/math/chi2.h>
@@ -157,6 +158,33 @@ TEST(Bearing, AnglesRoundTripAndJacobians)
 }
 
 #include <immslam/math/parallel.h>
+
+TEST(ThreadPool, BackToBackJobsOfEverySizeAndUnevenCosts)
+{
+  // Many short jobs in a row (the workers spin between them) and indices of very different cost
+  // (dynamic scheduling): every index runs exactly once, results do not depend on the thread count.
+  std::vector<double> ref;
+  for (unsigned n : {1u, 2u, 4u})
+  {
+    CThreadPool pool(n);
+    std::vector<double> all;
+    for (int rep = 0; rep < 500; ++rep)
+    {
+      const int len = 1 + rep % 11;
+      std::vector<double> out(len, 0.0);
+      pool.parallelFor(rep, rep + len, [&](int i) {
+        double s = 0;
+        for (int k = 0; k < ((i - rep) % 3 == 0 ? 2000 : 10); ++k) s += std::sin(0.001 * k + i);
+        out[i - rep] += s;
+      });
+      all.insert(all.end(), out.begin(), out.end());
+    }
+    if (ref.empty())
+      ref = all;
+    else
+      EXPECT_EQ(all, ref) << n << " threads";
+  }
+}
 
 TEST(ThreadPool, CoversEveryIndexOnceAndPropagatesErrors)
 {

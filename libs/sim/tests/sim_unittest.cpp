@@ -5,6 +5,7 @@
 #include <immslam/math/quaternion.h>
 #include <immslam/sim/CSimulator.h>
 #include <immslam/sim/CSyntheticSource.h>
+#include <immslam/sim/pixel_truth.h>
 #include <immslam/sim/render_app.h>
 
 #include <opencv2/features2d.hpp>
@@ -335,6 +336,67 @@ TEST(SimGeometry, MasksAgreeWithRaycastAndObjectPoses)
       }
   }
   EXPECT_GT(objectPixels, 1000u);
+}
+
+TEST(SimGeometry, TruthAtTrackedPixelsIsTheSurfacePointSeenThere)
+{
+  // Samples at object interiors, static interiors, silhouettes and a time with no frame: the truth
+  // returned is the ray-cast point (scored at 0 error when the estimate is exact), the kinds are
+  // the mask's, silhouettes are left out, and trackErrorAgainstPoints() joins each row to its own truth.
+  const CSimulator& sim = shipped("handheld-moving");
+  const std::size_t k = 90;
+  const cv::Mat mask = sim.renderMask(k);
+  cv::Mat inner, outer;
+  cv::erode(mask > 0, inner, cv::Mat::ones(9, 9, CV_8U));  // 4 px inside an object
+  cv::erode(mask == 0, outer, cv::Mat::ones(9, 9, CV_8U));
+  std::vector<eval::TTrackSample> samples;
+  std::vector<int> kind;  // 1 moving, 0 static, 2 silhouette
+  for (int v = 10; v < mask.rows - 10; v += 7)
+    for (int u = 10; u < mask.cols - 10; u += 7)
+    {
+      const bool edge = mask.at<std::uint8_t>(v, u) != mask.at<std::uint8_t>(v, u + 1);
+      const int c = inner.at<std::uint8_t>(v, u) ? 1 : outer.at<std::uint8_t>(v, u) ? 0 : edge ? 2 : -1;
+      if (c < 0) continue;
+      eval::TTrackSample t;
+      t.timestamp = sim.timestamp(k) + 1e-6;
+      t.featureId = static_cast<std::int64_t>(samples.size());
+      t.uv = Vec2(u + 0.3, v + 0.6);
+      samples.push_back(t);
+      kind.push_back(c);
+    }
+  eval::TTrackSample late = samples.front();
+  late.timestamp = sim.timestamp(k) + 0.5 / sim.scenario().fps;  // half-way between two frames
+  samples.push_back(late);
+  kind.push_back(3);
+
+  TPixelTruthStats st;
+  const auto truth = truthAtPixels(sim, samples, 1e-4, 2.0, 0.05, &st);
+  EXPECT_EQ(st.samples, samples.size());
+  EXPECT_EQ(st.noFrame, 1u);
+  const auto count = [&](int c) { return static_cast<std::size_t>(std::count(kind.begin(), kind.end(), c)); };
+  EXPECT_GT(count(1), 10u);
+  EXPECT_EQ(st.onMoving, count(1));
+  EXPECT_GE(st.boundary, count(2));  // every silhouette sample is left out
+  EXPECT_GE(st.onStatic, count(0) * 9 / 10);  // static interiors (a few are near a depth step of the room)
+  ASSERT_EQ(truth.size(), st.onMoving + st.onStatic);
+  for (const auto& g : truth)
+  {
+    const std::size_t s = static_cast<std::size_t>(g.pointId);
+    EXPECT_NE(kind[s], 2);
+    EXPECT_EQ(g.moving, kind[s] == 1);
+    const auto hit = sim.raycast(k, samples[s].uv);
+    ASSERT_TRUE(hit.has_value());
+    EXPECT_EQ((g.p_W - hit->p_W).norm(), 0.0);
+    samples[s].p_W = hit->p_W;  // a perfect tracker
+  }
+  const eval::TTrackErrorResult r = eval::trackErrorAgainstPoints(samples, truth, eval::TSim3{}, 0.5);
+  EXPECT_EQ(r.matched, st.onMoving);
+  EXPECT_EQ(r.onStatic, st.onStatic);
+  EXPECT_NEAR(r.rmse, 0.0, 1e-12);
+
+  // A folder without scenario.ini is refused naming it.
+  EXPECT_NE(errorOf([&] { truthAtPixelsOfRenderedFolder("/nonexistent-folder", samples); }).find("/nonexistent-folder"),
+            std::string::npos);
 }
 
 TEST(SimGeometry, MovingObjectsCoverAFewToAThirdOfTheImage)
