@@ -1,5 +1,7 @@
 /* Tests: the generic IMM against a textbook implementation, identical models = one filter,
- * probabilities valid, mixing keeps covariances symmetric positive definite. */
+ * probabilities valid, mixing keeps covariances symmetric positive definite and equals the dense
+ * textbook mixing for structured, general, sparse Markov matrices and zero probabilities, bitwise
+ * the same with and without a thread pool. */
 #include <gtest/gtest.h>
 #include <immslam/bayes/CIMMEstimator.h>
 #include <immslam/bayes/ekf_update.h>
@@ -7,7 +9,9 @@
 #include <immslam/math/parallel.h>
 
 #include <Eigen/Dense>
+#include <memory>
 #include <random>
+#include <string>
 
 using namespace immslam;
 using namespace immslam::bayes;
@@ -236,4 +240,204 @@ TEST(IMM, MixingKeepsCovariancesSymmetricPositiveDefinite)
   EXPECT_LT((imm.combinedBlock(imm.predictedProbabilities(), xf, 10, 6) - Pf.block(10, 10, 6, 6)).norm(), 1e-12);
   EXPECT_LT((imm.combinedColumns(imm.predictedProbabilities(), xf, 10, 6) - Pf.middleCols(10, 6)).norm(), 1e-12);
   EXPECT_LT((Pf - Pf.transpose()).norm(), 1e-12);
+}
+
+namespace
+{
+/** r modes of dimension n: means around a common offset (as the modes of a bank that differ
+ * slightly), symmetric positive definite covariances of different scales. */
+std::vector<TGaussian> randomModes(int r, int n, unsigned seed)
+{
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  VecX base(n);
+  for (int a = 0; a < n; ++a) base[a] = 10 * g(rng);
+  std::vector<TGaussian> modes;
+  for (int i = 0; i < r; ++i)
+  {
+    MatX A(n, n);
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b) A(a, b) = g(rng);
+    MatX P = (1.0 + 0.3 * i) * A * A.transpose() / n + 1e-3 * MatX::Identity(n, n);
+    P = 0.5 * (P + P.transpose()).eval();
+    VecX x = base;
+    for (int a = 0; a < n; ++a) x[a] += 0.3 * g(rng);
+    modes.push_back(TGaussian{x, P});
+  }
+  return modes;
+}
+
+/** Random row-stochastic matrix with distinct entries (dense Delta: every mode has r own terms). */
+MatX randomMarkov(int r, unsigned seed)
+{
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.05, 1.0);
+  MatX pi(r, r);
+  for (int j = 0; j < r; ++j)
+  {
+    for (int i = 0; i < r; ++i) pi(j, i) = u(rng) + (i == j ? 2.0 : 0.0);
+    pi.row(j) /= pi.row(j).sum();
+  }
+  return pi;
+}
+
+MatX defaultMarkov(int r, double stay)
+{
+  MatX pi = MatX::Constant(r, r, (1.0 - stay) / (r - 1));
+  pi.diagonal().setConstant(stay);
+  return pi;
+}
+
+/** The textbook mixing (Fig. 2 step 1), dense, written independently of the library. */
+void textbookMix(const MatX& pi, const VecX& mu, const std::vector<TGaussian>& in, std::vector<TGaussian>& out)
+{
+  const int r = static_cast<int>(mu.size());
+  const auto n = in[0].x.size();
+  out.assign(r, TGaussian{});
+  for (int i = 0; i < r; ++i)
+  {
+    double c = 0;
+    for (int j = 0; j < r; ++j) c += pi(j, i) * mu[j];
+    if (c <= 0)
+    {
+      out[i] = in[i];
+      continue;
+    }
+    out[i].x = VecX::Zero(n);
+    for (int j = 0; j < r; ++j) out[i].x += pi(j, i) * mu[j] / c * in[j].x;
+    out[i].P = MatX::Zero(n, n);
+    for (int j = 0; j < r; ++j)
+    {
+      const VecX d = in[j].x - out[i].x;
+      out[i].P += pi(j, i) * mu[j] / c * (in[j].P + d * d.transpose());
+    }
+  }
+}
+
+/** mix() with no pool, a 1-thread and a 2-thread pool: bitwise equal, equal to the textbook to
+ * 1e-12 relative, exactly symmetric, positive definite. The 2-thread estimator first mixes modes of
+ * another dimension (its buffers are reused at a new size). */
+void checkMixing(const MatX& pi, const VecX& mu, const std::vector<TGaussian>& modes, const std::string& what)
+{
+  SCOPED_TRACE(what);
+  const int r = static_cast<int>(mu.size());
+  const auto n = modes[0].x.size();
+  std::vector<TGaussian> ref;
+  textbookMix(pi, mu, modes, ref);
+
+  math::CThreadPool pool1(1), pool2(2);
+  std::vector<std::unique_ptr<CIMMEstimator>> imms;
+  for (math::CThreadPool* pool : {static_cast<math::CThreadPool*>(nullptr), &pool1, &pool2})
+  {
+    imms.push_back(std::make_unique<CIMMEstimator>(pi, mu, 0.0));
+    CIMMEstimator& imm = *imms.back();
+    if (pool == &pool2)
+    {
+      const auto other = randomModes(r, static_cast<int>(n) + 21, 99);
+      for (int i = 0; i < r; ++i) imm.mode(i) = other[i];
+      imm.mix(pool);  // mix() leaves mu as it is: the mix under test sees the same probabilities
+      for (int i = 0; i < r; ++i) imm.mode(i) = modes[i];
+    }
+    else
+      for (int i = 0; i < r; ++i) imm.mode(i) = modes[i];
+    imm.mix(pool);
+  }
+  for (int i = 0; i < r; ++i)
+  {
+    const TGaussian& g = imms[0]->mode(i);
+    const double scaleP = ref[i].P.cwiseAbs().maxCoeff(), scaleX = ref[i].x.cwiseAbs().maxCoeff();
+    EXPECT_LE((g.x - ref[i].x).cwiseAbs().maxCoeff(), 1e-12 * scaleX) << "mode " << i;
+    EXPECT_LE((g.P - ref[i].P).cwiseAbs().maxCoeff(), 1e-12 * scaleP) << "mode " << i;
+    EXPECT_TRUE(g.P == g.P.transpose()) << "mode " << i << " not exactly symmetric";
+    EXPECT_GT(Eigen::SelfAdjointEigenSolver<MatX>(g.P).eigenvalues().minCoeff(), 0.0) << "mode " << i;
+    EXPECT_NEAR(imms[0]->mixingWeights().col(i).sum(), 1.0, 1e-12);
+    for (size_t k = 1; k < imms.size(); ++k)
+    {
+      EXPECT_TRUE(imms[k]->mode(i).x == g.x) << "mode " << i << " run " << k << ": means differ between pools";
+      EXPECT_TRUE(imms[k]->mode(i).P == g.P) << "mode " << i << " run " << k << ": covariances differ between pools";
+      EXPECT_TRUE(imms[k]->mixingWeights() == imms[0]->mixingWeights());
+    }
+  }
+}
+
+VecX randomProbabilities(int r, unsigned seed)
+{
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.01, 1.0);
+  VecX mu(r);
+  for (int i = 0; i < r; ++i) mu[i] = u(rng);
+  return mu / mu.sum();
+}
+}  // namespace
+
+TEST(IMM, MixingEqualsTextbookForTheDefaultMatrix)
+{
+  VecX mu(7);
+  mu << 0.02, 0.03, 0.05, 0.1, 0.2, 0.3, 0.3;
+  for (int n : {133, 64, 17, 3})  // 133 = 8 chunks of 16 + 5
+    checkMixing(defaultMarkov(7, 0.995), mu, randomModes(7, n, 1 + n), "default 0.995, n = " + std::to_string(n));
+  checkMixing(defaultMarkov(7, 0.9), randomProbabilities(7, 2), randomModes(7, 40, 3), "default 0.9");
+  // Every row the same: only the common term, every mode gets the same (the combined) Gaussian.
+  checkMixing(defaultMarkov(4, 0.25), randomProbabilities(4, 4), randomModes(4, 40, 5), "uniform");
+}
+
+TEST(IMM, MixingEqualsTextbookForAGeneralMatrix)
+{
+  for (int r : {2, 3, 5, 7})
+    for (int n : {1, 16, 77})
+      checkMixing(randomMarkov(r, 10 + r), randomProbabilities(r, 20 + r), randomModes(r, n, 30 + r + n),
+                  "random pi, r = " + std::to_string(r) + ", n = " + std::to_string(n));
+}
+
+TEST(IMM, MixingEqualsTextbookWithZerosInTheMatrix)
+{
+  // Every column has a zero: every beta_i = 0, no common term at all.
+  MatX band(4, 4);
+  band << 0.9, 0.1, 0, 0, 0.05, 0.9, 0.05, 0, 0, 0.05, 0.9, 0.05, 0, 0, 0.1, 0.9;
+  checkMixing(band, randomProbabilities(4, 40), randomModes(4, 77, 41), "banded");
+  // Columns 0 and 1 with beta > 0, column 2 with beta = 0.
+  MatX mixed(3, 3);
+  mixed << 0.8, 0.2, 0.0, 0.1, 0.8, 0.1, 0.1, 0.1, 0.8;
+  checkMixing(mixed, randomProbabilities(3, 42), randomModes(3, 50, 43), "some zero columns");
+  // Identity: no mixing at all.
+  checkMixing(MatX::Identity(3, 3), randomProbabilities(3, 44), randomModes(3, 20, 45), "identity");
+  // Two states: switching for sure.
+  MatX swap(2, 2);
+  swap << 0, 1, 1, 0;
+  checkMixing(swap, randomProbabilities(2, 46), randomModes(2, 33, 47), "swap");
+}
+
+TEST(IMM, MixingEqualsTextbookWithAZeroProbability)
+{
+  VecX mu(4);
+  mu << 0.5, 0.0, 0.3, 0.2;
+  checkMixing(defaultMarkov(4, 0.95), mu, randomModes(4, 45, 50), "mu_1 = 0, default pi");
+  checkMixing(randomMarkov(4, 51), mu, randomModes(4, 45, 52), "mu_1 = 0, random pi");
+  // c_1 = c_2 = 0: modes 1 and 2 are unreachable and keep their Gaussians exactly.
+  MatX pi(3, 3);
+  pi << 1, 0, 0, 0, 0.5, 0.5, 0, 0.5, 0.5;
+  const VecX mu2 = Eigen::Vector3d(1, 0, 0);
+  const auto modes = randomModes(3, 30, 53);
+  checkMixing(pi, mu2, modes, "c_i = 0");
+  CIMMEstimator imm(pi, mu2, 0.0);
+  for (int i = 0; i < 3; ++i) imm.mode(i) = modes[i];
+  imm.mix();
+  for (int i = 0; i < 3; ++i)
+  {
+    EXPECT_TRUE(imm.mode(i).x == modes[i].x);
+    EXPECT_TRUE(imm.mode(i).P == modes[i].P);
+  }
+}
+
+TEST(IMM, MixingWithOneModelChangesNothing)
+{
+  const auto modes = randomModes(1, 20, 60);
+  CIMMEstimator imm(MatX::Identity(1, 1), VecX::Ones(1));
+  imm.mode(0) = modes[0];
+  math::CThreadPool pool(2);
+  imm.mix(&pool);
+  EXPECT_TRUE(imm.mode(0).x == modes[0].x);
+  EXPECT_TRUE(imm.mode(0).P == modes[0].P);
+  EXPECT_EQ(imm.mixingWeights()(0, 0), 1.0);
+  EXPECT_EQ(imm.predictedProbabilities()[0], 1.0);
 }

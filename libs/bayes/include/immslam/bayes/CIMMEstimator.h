@@ -49,13 +49,29 @@ class CIMMEstimator
   const MatX& transition() const { return m_pi; }
   double probabilityFloor() const { return m_floor; }
 
-  /** Fig. 2 step 1 (filter reinitialization): predicted probabilities, mixing weights
-   * \f$ \mu^{j|i} = \pi_{ji}\mu^j / \mu^i_{k|k-1} \f$, and every mode replaced by its mixed
-   * estimate and covariance \f$ \bar x^i = \sum_j \mu^{j|i} x^j \f$,
-   * \f$ \bar P^i = \sum_j \mu^{j|i} (P^j + (\bar x^i - x^j)(\bar x^i - x^j)^\top) \f$.
-   * The covariances are computed tile by tile (each input tile read once for all outputs, lower
-   * triangle only, then mirrored): O(r^2 n^2) flops, O(2 r n^2) memory traffic.
-   * \param pool optional worker pool (tiles in parallel; deterministic). */
+  /** IMM paper Fig. 2 step 1 (filter reinitialization): predicted probabilities
+   * \f$ c_i = \mu^i_{k|k-1} = \sum_j \pi_{ji}\mu^j \f$, mixing weights
+   * \f$ W_{ji} = \mu^{j|i} = \pi_{ji}\mu^j / c_i \f$ (identity column if c_i = 0: mode i kept as
+   * it is), and every mode replaced by its mixed estimate and covariance
+   * \f$ \bar x^i = \sum_j W_{ji} x^j \f$,
+   * \f$ \bar P^i = \sum_j W_{ji} (P^j + (x^j - \bar x^i)(x^j - \bar x^i)^\top) \f$.
+   *
+   * Computed exactly (no approximation), for any Markov matrix, from the structure of pi: per column i,
+   * beta_i = min_j pi_ji (diagonal included) and Delta_ji = pi_ji - beta_i >= 0. Expanded around
+   * xm = sum_j mu^j x^j with y_j = x^j - xm and ybar_i = sum_j W_ji y_j (= xbar^i - xm; differences
+   * of nearby means, so the sums below carry no large offsets), since sum_j W_ji = 1:
+   * \f[ \bar P^i = \frac{\beta_i}{c_i}(S + T) + \sum_{j: \Delta_{ji} > 0} \frac{\Delta_{ji}\mu^j}{c_i}
+   *     (P^j + y_j y_j^\top) - \bar y_i \bar y_i^\top, \qquad S = \sum_j \mu^j P^j,\;
+   *     T = \sum_j \mu^j y_j y_j^\top \f]
+   * S + T is shared by all outputs (skipped when every beta_i is 0; a column with beta_i = 0 skips
+   * it). For the default pi = transition_stay on the diagonal, the rest even, Delta is diagonal: each
+   * output is the common term plus its own mode. Rounding: the subtraction of ybar ybar^T costs
+   * O(eps max_j |y_j|^2) absolutely, i.e. relative to the spread of the modes' means, not to |x|.
+   * Cost O(r n^2) + O(nnz(Delta) n^2) flops (the direct sum is O(r^2 n^2)); memory: the lower
+   * triangles of the r inputs read once, the r outputs written once.
+   * Column chunk by column chunk: lower triangle of each column (sequential accesses), then the
+   * chunk's rows of the upper triangle copied from it, so every output is exactly symmetric.
+   * \param pool optional worker pool (chunks in parallel; bitwise the same result for any pool). */
   void mix(math::CThreadPool* pool = nullptr);
 
   /** The mixing weights mu^{j|i} of the last mix(): column i holds the weights of mode i. */
@@ -83,5 +99,14 @@ class CIMMEstimator
   double m_floor;
   std::vector<TGaussian> m_modes;
   std::vector<MatX> m_scratch;  ///< output buffers of mix(), swapped with the modes' P
+  // Buffers of mix() (kept between calls: no allocation while the dimension stays the same).
+  VecX m_mixXm;    ///< xm = sum_j mu^j x^j, the point the mixing is expanded around
+  MatX m_mixY;     ///< n x r: y_j = x^j - xm
+  MatX m_mixMuYT;  ///< r x n: mu^j y_j^T (column c gives T(:, c) = Y m_mixMuYT(:, c))
+  MatX m_mixYbar;  ///< n x r: ybar_i = xbar^i - xm = sum_j mu^{j|i} y_j
+  MatX m_mixXbar;  ///< n x r: the mixed means
+  MatX m_mixA;     ///< r x r: (pi_ji - beta_i) mu^j / c_i, the weights above the column minimum
+  VecX m_mixB;     ///< r: beta_i / c_i, the weight of the common term S + T
+  MatX m_mixU;     ///< n x chunks: one column of S + T per column chunk
 };
 }  // namespace immslam::bayes
