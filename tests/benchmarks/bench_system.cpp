@@ -74,6 +74,8 @@ std::vector<TConfig> configs()
   std::vector<TConfig> out;
   for (const char* c : {"single", "imm7", "single-shadow", "imm7-shadow"})
     if (fs::exists(immslam::bench::sourceDir() + "/ini/" + c + ".ini")) out.push_back({c, c, {}});
+  // The exact IMM (every mode updated every frame): what the dormant modes save.
+  if (fs::exists(immslam::bench::sourceDir() + "/ini/imm7.ini")) out.push_back({"imm7-exact", "imm7", {"imm.dormant_below=0"}});
   if (std::getenv("IMMSLAM_BENCH_NO_1T") == nullptr)
     for (const char* c : {"single", "imm7"})
       if (fs::exists(immslam::bench::sourceDir() + "/ini/" + c + ".ini"))
@@ -216,6 +218,8 @@ void BM_System(benchmark::State& st, const TSequence& seq)
     st.counters["ratio_imm7_single"] = acc["imm7_time_ms"] / acc["single_time_ms"];
   if (acc.count("single_slam_ms") && acc["single_slam_ms"] > 0 && acc.count("imm7_slam_ms"))
     st.counters["ratio_imm7_single_slam"] = acc["imm7_slam_ms"] / acc["single_slam_ms"];
+  if (acc.count("single_time_ms") && acc["single_time_ms"] > 0 && acc.count("imm7-exact_time_ms"))
+    st.counters["ratio_imm7exact_single"] = acc["imm7-exact_time_ms"] / acc["single_time_ms"];
   if (acc.count("single-1t_time_ms") && acc["single-1t_time_ms"] > 0 && acc.count("imm7-1t_time_ms"))
     st.counters["ratio_imm7_single_1t"] = acc["imm7-1t_time_ms"] / acc["single-1t_time_ms"];
   if (acc.count("single-map60_time_ms") && acc["single-map60_time_ms"] > 0 && acc.count("imm7-map60_time_ms"))

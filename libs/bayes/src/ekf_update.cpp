@@ -58,6 +58,29 @@ MatX innovationCovariance(const MatX& P, const CSparseJacobian& H, const VecX& R
   return S;
 }
 
+TUpdateResult ekfLogLikelihood(const MatX& P, const CSparseJacobian& H, const VecX& nu, const VecX& Rdiag, VecX* x)
+{
+  TUpdateResult res;
+  res.dim = static_cast<int>(nu.size());
+  if (nu.size() == 0)
+  {
+    res.ok = true;
+    return res;
+  }
+  const MatX PHt = H.timesTransposedBy(P);
+  MatX S = H.times(PHt);
+  S = 0.5 * (S + S.transpose());
+  S.diagonal() += Rdiag;
+  const Eigen::LLT<MatX> llt(S);
+  if (llt.info() != Eigen::Success) return res;
+  res.nis = llt.matrixL().solve(nu).squaredNorm();
+  if (x) x->noalias() += PHt * llt.solve(nu);
+  res.logLikelihood =
+      -0.5 * (res.nis + 2.0 * llt.matrixLLT().diagonal().array().log().sum() + res.dim * std::log(2 * M_PI));
+  res.ok = true;
+  return res;
+}
+
 TUpdateResult ekfUpdate(VecX& x, MatX& P, const CSparseJacobian& H, const VecX& nu, const VecX& Rdiag)
 {
   TUpdateResult res;

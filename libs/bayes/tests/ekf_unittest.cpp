@@ -78,6 +78,25 @@ TEST(EkfUpdate, MatchesTextbookKalmanUpdate)
   EXPECT_EQ(res.dim, 6);
 }
 
+TEST(EkfUpdate, LogLikelihoodOnlyMatchesTheUpdateAndLeavesTheStateAlone)
+{
+  std::mt19937 rng(4);
+  const int n = 31;
+  CSparseJacobian H(8, n);
+  for (int k = 0; k < 4; ++k) H.addBlock(2 * k, 7 + 6 * k, randomMat(2, 6, rng));
+  VecX x = randomMat(n, 1, rng);
+  MatX P = randomSpd(n, rng);
+  const VecX nu = randomMat(8, 1, rng);
+  const VecX R = VecX::Constant(8, 0.3);
+  const auto only = ekfLogLikelihood(P, H, nu, R);
+  const auto full = ekfUpdate(x, P, H, nu, R);
+  ASSERT_TRUE(only.ok && full.ok);
+  EXPECT_NEAR(only.logLikelihood, full.logLikelihood, 1e-9 * std::abs(full.logLikelihood));
+  EXPECT_NEAR(only.nis, full.nis, 1e-9 * full.nis);
+  EXPECT_EQ(only.dim, 8);
+  EXPECT_FALSE(ekfLogLikelihood(MatX::Zero(n, n), H, nu, VecX::Zero(8)).ok);
+}
+
 TEST(EkfUpdate, RejectsNonPositiveInnovationCovariance)
 {
   std::mt19937 rng(3);

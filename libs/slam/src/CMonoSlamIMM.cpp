@@ -31,6 +31,8 @@ CMonoSlamIMM::CMonoSlamIMM(const TOptions& opts, const TIMMBankOptions& bank, co
                                                  r > 1 ? bank.probability_floor : 0.0);
   m_pool = std::make_unique<math::CThreadPool>(static_cast<unsigned>(m_opts.num_threads));
   m_scratch.resize(r);
+  m_dormantBelow = r > 1 ? bank.dormant_below : 0.0;
+  m_dormant.assign(r, 0);
   m_focal = 0.5 * (m_cam->fx() + m_cam->fy());
   m_sigmaPixel = m_opts.sigma_pixel;
   initialiseState();
@@ -80,6 +82,9 @@ double CMonoSlamIMM::frameDt(double t)
 void CMonoSlamIMM::predict(double dt)
 {
   const int r = m_imm->numModels();
+  m_dormantDecided = false;
+  std::fill(m_dormant.begin(), m_dormant.end(), 0);
+  m_dormantUse.clear();
   m_imm->mix(m_pool.get());
   m_pool->parallelFor(0, r, [&](int i) {
     auto& g = m_imm->mode(i);
@@ -195,6 +200,38 @@ void CMonoSlamIMM::searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& 
   m_report.nFound = static_cast<int>(cands.size());
 }
 
+void CMonoSlamIMM::buildMeasurement(const bayes::TGaussian& g, const std::vector<TCandidate>& cands,
+                                    const std::vector<int>& use, bayes::CSparseJacobian& H, VecX& nu) const
+{
+  const int m = static_cast<int>(use.size());
+  H.resize(2 * m, static_cast<int>(g.x.size()));
+  nu.resize(2 * m);
+  for (int a = 0; a < m; ++a)
+  {
+    const TCandidate& c = cands[use[a]];
+    const TFeature& f = m_features[c.feature];
+    Vec2 h;
+    Mat2F Jf;
+    predictMeasurement(*m_cam, g.x, f, h, &Jf);  // each mode linearizes at its own estimate
+    nu.segment<2>(2 * a) = c.z - h;
+    H.addBlock(2 * a, f.offset, Jf);
+  }
+}
+
+namespace
+{
+/** What a motion family estimates: general (v, w) > rotation (w) > stationary (nothing). */
+int familyRank(const motion::TMotionModel& m)
+{
+  switch (m.family)
+  {
+    case motion::EMotionFamily::General: return 2;
+    case motion::EMotionFamily::Rotation: return 1;
+    default: return 0;
+  }
+}
+}  // namespace
+
 void CMonoSlamIMM::updateBank(const std::vector<TCandidate>& cands, const std::vector<int>& which, VecX& logLik)
 {
   const int r = m_imm->numModels();
@@ -213,27 +250,113 @@ void CMonoSlamIMM::updateBank(const std::vector<TCandidate>& cands, const std::v
   }
   const int m = static_cast<int>(use.size());
   if (m == 0) return;
+  constexpr double kNoLik = -std::numeric_limits<double>::infinity();
   const VecX Rdiag = VecX::Constant(2 * m, m_sigmaPixel * m_sigmaPixel);
-  m_pool->parallelFor(0, r, [&](int i) {
-    auto& g = m_imm->mode(i);
-    bayes::CSparseJacobian H(2 * m, static_cast<int>(g.x.size()));
-    VecX nu(2 * m);
-    for (int a = 0; a < m; ++a)
+
+  if (m_dormantBelow > 0 && !m_dormantDecided)
+  {
+    // First update of the frame: every mode's likelihood first (cheap), then the dormant set, then the
+    // covariance update of the others only. The likelihood is the one ekfUpdate() would report.
+    VecX ll(r);
+    m_pool->parallelFor(0, r, [&](int i) {
+      bayes::CSparseJacobian H;
+      VecX nu;
+      buildMeasurement(m_imm->mode(i), cands, use, H, nu);
+      const auto res = bayes::ekfLogLikelihood(m_imm->mode(i).P, H, nu, Rdiag);
+      ll[i] = res.ok ? res.logLikelihood : kNoLik;
+    });
+    VecX a(r);
+    for (int i = 0; i < r; ++i) a[i] = std::log(std::max(m_imm->predictedProbabilities()[i], 1e-300)) + ll[i];
+    const double lse = math::logSumExp(a);
+    if (std::isfinite(lse))
     {
-      const TCandidate& c = cands[use[a]];
-      const TFeature& f = m_features[c.feature];
-      Vec2 h;
-      Mat2F Jf;
-      predictMeasurement(*m_cam, g.x, f, h, &Jf);  // each mode linearizes at its own estimate
-      nu.segment<2>(2 * a) = c.z - h;
-      H.addBlock(2 * a, f.offset, Jf);
+      int best = 0;
+      a.maxCoeff(&best);
+      for (int i = 0; i < r; ++i) m_dormant[i] = i != best && std::exp(a[i] - lse) < m_dormantBelow ? 1 : 0;
+      // A dormant mode later takes the posterior of an updated mode that estimates at least what it
+      // estimates (general > rotation > stationary: the velocities a rotation or stationary mode holds
+      // at zero with zero variance must not overwrite a general mode's). Keep one such mode updated.
+      for (int rank = 2; rank >= 1; --rank)
+      {
+        int pick = -1;
+        bool covered = false;
+        for (int i = 0; i < r; ++i)
+          if (familyRank(m_models[i]) >= rank)
+          {
+            covered = covered || !m_dormant[i];
+            if (pick < 0 || a[i] > a[pick]) pick = i;
+          }
+        if (!covered && pick >= 0) m_dormant[pick] = 0;
+      }
     }
-    const auto res = bayes::ekfUpdate(g.x, g.P, H, nu, Rdiag);
-    logLik[i] += res.ok ? res.logLikelihood : -std::numeric_limits<double>::infinity();
-    normalizeQuaternion(g);
-  });
+    m_dormantDecided = true;
+    m_dormantUse = use;
+    m_pool->parallelFor(0, r, [&](int i) {
+      logLik[i] += ll[i];
+      if (m_dormant[i]) return;  // stays at its prediction
+      auto& g = m_imm->mode(i);
+      bayes::CSparseJacobian H;
+      VecX nu;
+      buildMeasurement(g, cands, use, H, nu);
+      bayes::ekfUpdate(g.x, g.P, H, nu, Rdiag);
+      normalizeQuaternion(g);
+    });
+  }
+  else
+  {
+    m_dormantDecided = true;
+    // A dormant mode is still at its prediction: its likelihood of every measurement of the frame is
+    // the joint one of all of them (eq. 3), which replaces the first update's.
+    std::vector<int> joint;
+    if (std::find(m_dormant.begin(), m_dormant.end(), 1) != m_dormant.end())
+    {
+      joint = m_dormantUse;
+      joint.insert(joint.end(), use.begin(), use.end());
+      m_dormantUse = joint;
+    }
+    const VecX RdiagJoint = VecX::Constant(2 * static_cast<int>(joint.size()), m_sigmaPixel * m_sigmaPixel);
+    m_pool->parallelFor(0, r, [&](int i) {
+      auto& g = m_imm->mode(i);
+      bayes::CSparseJacobian H;
+      VecX nu;
+      if (m_dormant[i])
+      {
+        buildMeasurement(g, cands, joint, H, nu);
+        const auto res = bayes::ekfLogLikelihood(g.P, H, nu, RdiagJoint);
+        logLik[i] = res.ok ? res.logLikelihood : kNoLik;
+        return;
+      }
+      buildMeasurement(g, cands, use, H, nu);
+      const auto res = bayes::ekfUpdate(g.x, g.P, H, nu, Rdiag);
+      logLik[i] += res.ok ? res.logLikelihood : kNoLik;
+      normalizeQuaternion(g);
+    });
+  }
   for (int c : use) m_features[cands[c].feature].nMatched++;
   m_report.nMatched += m;
+}
+
+void CMonoSlamIMM::settleDormantModes()
+{
+  const int r = m_imm->numModels();
+  m_report.nDormantModes = 0;
+  for (int i = 0; i < r; ++i) m_report.nDormantModes += m_dormant[i] ? 1 : 0;
+  if (m_report.nDormantModes == 0) return;
+  // Source of each dormant mode: the most probable updated mode of an equal or richer family.
+  const VecX& mu = m_imm->probabilities();
+  std::vector<int> source(r, -1);
+  for (int i = 0; i < r; ++i)
+    if (m_dormant[i])
+      for (int j = 0; j < r; ++j)
+        if (!m_dormant[j] && familyRank(m_models[j]) >= familyRank(m_models[i]) &&
+            (source[i] < 0 || mu[j] > mu[source[i]]))
+          source[i] = j;
+  m_pool->parallelFor(0, r, [&](int i) {
+    if (source[i] < 0) return;
+    m_imm->mode(i).x = m_imm->mode(source[i]).x;
+    m_imm->mode(i).P = m_imm->mode(source[i]).P;
+  });
+  std::fill(m_dormant.begin(), m_dormant.end(), 0);
 }
 
 std::vector<int> CMonoSlamIMM::rescue(const std::vector<TCandidate>& cands, const std::vector<char>& used)

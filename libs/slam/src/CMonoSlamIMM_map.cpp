@@ -78,6 +78,7 @@ const TFrameReport& CMonoSlamIMM::processMeasurements(double timestamp,
     VecX logLik = VecX::Zero(m_imm->numModels());
     updateBank(cands, all, logLik);
     if (m_imm->numModels() > 1) m_imm->updateProbabilities(logLik);
+    settleDormantModes();
     refreshFused();
     const int minPred = m_opts.delete_min_predictions;
     m_opts.delete_min_predictions = std::numeric_limits<int>::max();  // no deletion: known association
@@ -143,11 +144,16 @@ const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& 
       for (int i = 0; i < r; ++i) a[i] = std::log(std::max(m_imm->predictedProbabilities()[i], 1e-300)) + logLik[i];
       const double lse = math::logSumExp(a);
       m_rescueWeights = std::isfinite(lse) ? VecX((a.array() - lse).exp()) : m_imm->predictedProbabilities();
+      // Dormant modes are still at their prediction: the rescue test uses the updated ones.
+      for (int i = 0; i < r; ++i)
+        if (m_dormant[i]) m_rescueWeights[i] = 0;
+      if (m_rescueWeights.sum() > 0) m_rescueWeights /= m_rescueWeights.sum();
     }
     const std::vector<int> high = rescue(cands, used);
     updateBank(cands, high, logLik);
     m_report.nRescued = m_report.nMatched - m_report.nLowInnovation;
     if (r > 1) m_imm->updateProbabilities(logLik);
+    settleDormantModes();
     m_report.nRejected = m_report.nFound - m_report.nMatched;
     for (int c : low) used[c] = 1;
     // Record the status of each search.

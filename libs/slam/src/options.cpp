@@ -123,10 +123,12 @@ void TIMMBankOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c,
   IMMSLAM_LOAD_DOUBLE(transition_stay);
   IMMSLAM_LOAD_VECTOR(prior);
   IMMSLAM_LOAD_DOUBLE(probability_floor);
+  IMMSLAM_LOAD_DOUBLE(dormant_below);
   const int r = static_cast<int>(parseModels().size());
   transitionMatrix(r);  // validates
   priorProbabilities(r);
   core::requireInRange(probability_floor, 0, 0.99 / r, s, "probability_floor");
+  core::requireInRange(dormant_below, 0, 0.5, s, "dormant_below");
 }
 
 namespace
@@ -151,6 +153,7 @@ void TIMMBankOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const s
   c.write(s, "prior", joinNumbers(prior), mrpt::config::MRPT_SAVE_NAME_PADDING(), mrpt::config::MRPT_SAVE_VALUE_PADDING(),
           "initial model probabilities ([] = uniform)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(probability_floor, "lower bound of every model probability");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(dormant_below, "modes below this probability given the frame are not updated (0 = exact IMM)");
 }
 
 std::vector<motion::TMotionModel> TIMMBankOptions::parseModels() const

@@ -61,6 +61,14 @@ struct TUpdateResult
  * \param Rdiag the diagonal of R (independent pixel noise). */
 TUpdateResult ekfUpdate(VecX& x, MatX& P, const CSparseJacobian& H, const VecX& nu, const VecX& Rdiag);
 
+/** The log-likelihood \f$ \ln \mathcal{N}(\nu; 0, H P H^\top + R) \f$ and NIS of the innovation, without
+ * updating (x, P): the same numbers ekfUpdate() reports, at O(n * sum of block sizes + m^3) instead of
+ * the update's O(n^2 m). Used for the IMM modes that are not updated in a frame (see
+ * CMonoSlamIMM, dormant modes). \param x if given, the mean update only: x += P H^T S^-1 nu (O(n m)).
+ * \return ok = false if S is not positive definite (x left unchanged). */
+TUpdateResult ekfLogLikelihood(const MatX& P, const CSparseJacobian& H, const VecX& nu, const VecX& Rdiag,
+                               VecX* x = nullptr);
+
 /** Innovation covariance \f$ H P H^\top + R \f$ only (no update). */
 MatX innovationCovariance(const MatX& P, const CSparseJacobian& H, const VecX& Rdiag);
 }  // namespace immslam::bayes
