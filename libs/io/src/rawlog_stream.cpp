@@ -5,6 +5,7 @@
 
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CStream.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <array>
@@ -67,6 +68,7 @@ class CCountingGzStream : public mrpt::io::CStream
       m_eof = true;
       return 0;
     }
+    if (!checkJpegImage(buffer, count)) return 0;
     if (!checkContainerCount(buffer, count)) return 0;
     return got;
   }
@@ -91,6 +93,96 @@ class CCountingGzStream : public mrpt::io::CStream
   void setIsGzip(bool g) { m_isGzip = g; }
 
  private:
+  /** MRPT's CImage deserializer hands the JPEG payload of a colour image to libjpeg with libjpeg's
+   * default error handler, which calls exit() on a fatal error (a bad marker, not a JPEG at all):
+   * one damaged frame would end the process with nothing written (found by fuzzing,
+   * tests/fuzz/regressions/rawlog/image_jpeg_*). The stream follows the reads of a CImage as
+   * MRPT 2.5 makes them (class name; version; v >= 6: external flag; colour flag; v >= 7: width,
+   * height; then the payload size and the payload, for v >= 2 only for a colour image of positive
+   * size) and decodes the payload first with OpenCV, whose libjpeg error handler returns instead of
+   * exiting. A payload that is not a JPEG OpenCV can decode is refused as damage, before MRPT sees
+   * it. Any read of an unexpected size drops the tracking (other data, not a CImage). */
+  bool checkJpegImage(const void* buffer, size_t count)
+  {
+    const auto* b = static_cast<const unsigned char*>(buffer);
+    const auto i32 = [&] {
+      return static_cast<int32_t>(uint32_t(b[0]) | (uint32_t(b[1]) << 8) | (uint32_t(b[2]) << 16) | (uint32_t(b[3]) << 24));
+    };
+    const EImageRead st = m_img;
+    m_img = EImageRead::None;
+    switch (st)
+    {
+      case EImageRead::None: break;
+      case EImageRead::Version:
+        if (count != 1) break;
+        m_imgVersion = b[0];
+        if (m_imgVersion == 1)
+          m_img = EImageRead::PayloadSize;
+        else if (m_imgVersion >= 2 && m_imgVersion <= 9)
+          m_img = m_imgVersion >= 6 ? EImageRead::External : EImageRead::HasColor;
+        return true;
+      case EImageRead::External:
+        if (count == 1 && b[0] == 0) m_img = EImageRead::HasColor;
+        return true;
+      case EImageRead::HasColor:
+        if (count == 1 && b[0] != 0) m_img = m_imgVersion >= 7 ? EImageRead::Width : EImageRead::PayloadSize;
+        return true;
+      case EImageRead::Width:
+        if (count != 4) break;
+        m_imgWidth = i32();
+        m_img = EImageRead::Height;
+        return true;
+      case EImageRead::Height:
+        if (count == 4 && m_imgWidth >= 1 && i32() >= 1) m_img = EImageRead::PayloadSize;
+        return true;
+      case EImageRead::PayloadSize:
+        if (count != 4) break;
+        m_jpegBytes = static_cast<uint32_t>(i32());
+        if (m_jpegBytes < 4)  // MRPT would decode it (even 0 bytes) as a JPEG
+        {
+          m_implausible = "corrupt image: a JPEG of " + std::to_string(m_jpegBytes) + " bytes at byte " +
+                          std::to_string(m_bytes - 4);
+          return false;
+        }
+        m_img = EImageRead::Payload;
+        return true;
+      case EImageRead::Payload:
+        if (count != m_jpegBytes) break;
+        {
+          const bool signature = b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF;
+          cv::Mat decoded;
+          if (signature)
+          {
+            const cv::Mat raw(1, static_cast<int>(std::min<size_t>(count, INT32_MAX)), CV_8UC1, const_cast<unsigned char*>(b));
+            try
+            {
+              decoded = cv::imdecode(raw, cv::IMREAD_REDUCED_GRAYSCALE_8);
+            }
+            catch (const cv::Exception&)
+            {
+              decoded.release();
+            }
+          }
+          if (decoded.empty())
+          {
+            m_implausible = std::string("corrupt image: ") + (signature ? "undecodable" : "not a") + " JPEG of " +
+                            std::to_string(count) + " bytes at byte " + std::to_string(m_bytes - count);
+            return false;
+          }
+        }
+        return true;
+    }
+    // A class name (see checkContainerCount()): a CImage begins.
+    const std::size_t len = count > 127 ? 0 : static_cast<std::size_t>(std::find(b, b + count, 0) - b);
+    static const std::string kImage = "CImage";
+    if (len >= kImage.size() &&
+        std::equal(kImage.begin(), kImage.end(), b + len - kImage.size(), [](char x, unsigned char y) {
+          return std::tolower(static_cast<unsigned char>(x)) == std::tolower(y);
+        }))
+      m_img = EImageRead::Version;
+    return true;
+  }
+
   /** MRPT's deserializers of the container classes read an element count and resize to it before
    * reading any element: CActionCollection and CSensoryFrame resize a std::deque, which allocates
    * piece by piece, so a corrupt count in a 300-byte file makes MRPT allocate gigabytes (no single
@@ -132,6 +224,21 @@ class CCountingGzStream : public mrpt::io::CStream
     return true;
   }
 
+  enum class EImageRead
+  {
+    None,
+    Version,
+    External,
+    HasColor,
+    Width,
+    Height,
+    PayloadSize,
+    Payload
+  };
+  EImageRead m_img = EImageRead::None;  ///< where the reads of a CImage are (checkJpegImage())
+  int m_imgVersion = 0;
+  int32_t m_imgWidth = 0;
+  uint32_t m_jpegBytes = 0;
   bool m_inContainerHeader = false;
   std::string m_container;
   std::string m_implausible;

@@ -647,6 +647,59 @@ TEST(Rawlog, CorruptBytesEndCleanly)
   EXPECT_EQ(s.endWhy.rfind("rawlog truncated/corrupt after entry ", 0), 0u) << s.endWhy;
 }
 
+TEST(Rawlog, JpegImagesReadAndACorruptJpegEndsCleanly)
+{
+  // MRPT stores colour images as JPEG; its decoder would exit() the process on a fatal libjpeg error
+  // (found by fuzzing). The reader checks each payload first: good JPEGs read, a corrupt one is damage.
+  TempDir d;
+  const std::string rawlog = d / "jpeg.rawlog";
+  {
+    const bool old = mrpt::img::CImage::DISABLE_JPEG_COMPRESSION();
+    mrpt::img::CImage::DISABLE_JPEG_COMPRESSION(false);  // (process-wide flag of MRPT)
+    mrpt::io::CFileGZOutputStream f(rawlog);
+    auto a = mrpt::serialization::archiveFrom(f);
+    for (int i = 0; i < 4; ++i)
+    {
+      auto img = mrpt::obs::CObservationImage::Create();
+      img->sensorLabel = "CAMERA";
+      img->timestamp = mrpt::Clock::fromDouble(1.0 + i);
+      img->image = mrpt::img::CImage(syntheticImage(64, 48, CV_8UC3, i), mrpt::img::DEEP_COPY);
+      a << *img;
+    }
+    mrpt::img::CImage::DISABLE_JPEG_COMPRESSION(old);
+  }
+  {
+    CRawlogSource src(rawlog);
+    const TStream s = drain(src);
+    EXPECT_EQ(s.frames.size(), 4u);
+    EXPECT_EQ(s.endWhy, "");
+  }
+  // Uncompress, break the third JPEG's start-of-image marker (fatal for libjpeg), write it back.
+  std::string bytes;
+  {
+    gzFile gz = gzopen(rawlog.c_str(), "rb");
+    ASSERT_NE(gz, nullptr);
+    char buf[4096];
+    int got;
+    while ((got = gzread(gz, buf, sizeof buf)) > 0) bytes.append(buf, static_cast<std::size_t>(got));
+    gzclose(gz);
+  }
+  std::vector<std::size_t> soi;
+  for (std::size_t k = 0; k + 2 < bytes.size(); ++k)
+    if (static_cast<unsigned char>(bytes[k]) == 0xFF && static_cast<unsigned char>(bytes[k + 1]) == 0xD8 &&
+        static_cast<unsigned char>(bytes[k + 2]) == 0xFF)
+      soi.push_back(k);
+  ASSERT_EQ(soi.size(), 4u);
+  bytes[soi[2] + 1] = '\x00';
+  const std::string broken = d / "broken.rawlog";
+  std::ofstream(broken, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  CRawlogSource src(broken);
+  EXPECT_NE(src.damage().find("corrupt image: not a JPEG of "), std::string::npos) << src.damage();
+  const TStream s = drain(src);
+  EXPECT_EQ(s.frames.size(), 2u);
+  EXPECT_EQ(s.endWhy.rfind("rawlog truncated/corrupt after entry 2", 0), 0u) << s.endWhy;
+}
+
 TEST(Rawlog, NotARawlogThrowsNamingFile)
 {
   TempDir d;

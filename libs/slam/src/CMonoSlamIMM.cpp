@@ -33,6 +33,9 @@ CMonoSlamIMM::CMonoSlamIMM(const TOptions& opts, const TIMMBankOptions& bank, co
   m_scratch.resize(r);
   m_dormantBelow = r > 1 ? bank.dormant_below : 0.0;
   m_dormant.assign(r, 0);
+  m_wasDormant.assign(r, 0);
+  m_lazyPrediction = m_dormantBelow > 0 && bank.lazy_prediction;
+  m_lazy.resize(r);
   m_focal = 0.5 * (m_cam->fx() + m_cam->fy());
   m_sigmaPixel = m_opts.sigma_pixel;
   initialiseState();
@@ -90,7 +93,17 @@ void CMonoSlamIMM::predict(double dt)
     auto& g = m_imm->mode(i);
     const auto inc = motion::motionIncrement(m_models[i], g.x.segment<3>(motion::kV), g.x.segment<3>(motion::kW), dt,
                                              m_focal);
-    predictRobocentric(g, m_features, inc, m_scratch[i]);
+    TLazyMode& L = m_lazy[i];
+    L.active = m_lazyPrediction && m_wasDormant[i] && !inc.identity;
+    if (!L.active)
+    {
+      predictRobocentric(g, m_features, inc, m_scratch[i]);
+      return;
+    }
+    // Dormant in the previous frame: likely dormant again. Mean and transition blocks only.
+    predictRobocentricMean(g, m_features, inc, L.blocks);
+    L.blockAt.assign(g.x.size(), -1);
+    for (int b = 0; b < static_cast<int>(L.blocks.size()); ++b) L.blockAt[L.blocks[b].off] = b;
   });
   // IMM-fused prediction (paper eqs. 10-11): the search regions of the whole bank. Only its mean is
   // formed; the covariance blocks the search and RANSAC need come from predictedCov*().
@@ -100,16 +113,72 @@ void CMonoSlamIMM::predict(double dt)
     m_imm->combine(m_imm->predictedProbabilities(), m_xPred, nullptr);
 }
 
-MatX CMonoSlamIMM::predictedCovBlock(int off, int len) const
+void CMonoSlamIMM::materialize(int i)
 {
-  if (m_imm->numModels() == 1) return m_imm->mode(0).P.block(off, off, len, len);
-  return m_imm->combinedBlock(m_imm->predictedProbabilities(), m_xPred, off, len);
+  TLazyMode& L = m_lazy[i];
+  if (!L.active) return;
+  applyRobocentricTransition(m_imm->mode(i).P, L.blocks, m_scratch[i]);
+  L.active = false;
 }
 
-MatX CMonoSlamIMM::predictedCovColumns(int off, int len) const
+MatX CMonoSlamIMM::modePredictedBlock(int i, int off, int len)
 {
-  if (m_imm->numModels() == 1) return m_imm->mode(0).P.middleCols(off, len);
-  return m_imm->combinedColumns(m_imm->predictedProbabilities(), m_xPred, off, len);
+  const TLazyMode& L = m_lazy[i];
+  if (L.active)
+  {
+    const int b = off < static_cast<int>(L.blockAt.size()) ? L.blockAt[off] : -1;
+    if (b >= 0 && L.blocks[b].len == len) return transitionBlock(m_imm->mode(i).P, L.blocks[b]);
+    materialize(i);  // not one transition block: predict the covariance after all
+  }
+  return m_imm->mode(i).P.block(off, off, len, len);
+}
+
+MatX CMonoSlamIMM::modePredictedColumns(int i, int off, int len)
+{
+  const TLazyMode& L = m_lazy[i];
+  if (L.active)
+  {
+    const int b = off < static_cast<int>(L.blockAt.size()) ? L.blockAt[off] : -1;
+    if (b >= 0 && L.blocks[b].len == len) return transitionColumns(m_imm->mode(i).P, L.blocks, b);
+    materialize(i);
+  }
+  return m_imm->mode(i).P.middleCols(off, len);
+}
+
+MatX CMonoSlamIMM::predictedCovBlock(int off, int len)
+{
+  const int r = m_imm->numModels();
+  if (r == 1) return m_imm->mode(0).P.block(off, off, len, len);
+  if (std::none_of(m_lazy.begin(), m_lazy.end(), [](const TLazyMode& L) { return L.active; }))
+    return m_imm->combinedBlock(m_imm->predictedProbabilities(), m_xPred, off, len);
+  // Eq. (11) restricted to one block, with the lazy modes' blocks computed from their transition.
+  const VecX& w = m_imm->predictedProbabilities();
+  MatX B = MatX::Zero(len, len);
+  for (int i = 0; i < r; ++i)
+  {
+    if (!(w[i] > 0)) continue;
+    const VecX d = m_imm->mode(i).x.segment(off, len) - m_xPred.segment(off, len);
+    B += w[i] * (modePredictedBlock(i, off, len) + d * d.transpose());
+  }
+  return B;
+}
+
+MatX CMonoSlamIMM::predictedCovColumns(int off, int len)
+{
+  const int r = m_imm->numModels();
+  if (r == 1) return m_imm->mode(0).P.middleCols(off, len);
+  if (std::none_of(m_lazy.begin(), m_lazy.end(), [](const TLazyMode& L) { return L.active; }))
+    return m_imm->combinedColumns(m_imm->predictedProbabilities(), m_xPred, off, len);
+  const VecX& w = m_imm->predictedProbabilities();
+  MatX C = MatX::Zero(m_xPred.size(), len);
+  for (int i = 0; i < r; ++i)
+  {
+    if (!(w[i] > 0)) continue;
+    const VecX d = m_imm->mode(i).x - m_xPred;
+    C += w[i] * modePredictedColumns(i, off, len);
+    C.noalias() += (w[i] * d) * d.segment(off, len).transpose();
+  }
+  return C;
 }
 
 void CMonoSlamIMM::searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& cands)
@@ -232,6 +301,21 @@ int familyRank(const motion::TMotionModel& m)
 }
 }  // namespace
 
+double CMonoSlamIMM::modeLogLikelihood(int i, const bayes::CSparseJacobian& H, const VecX& nu, const VecX& Rdiag) const
+{
+  const TLazyMode& L = m_lazy[i];
+  if (!L.active)
+  {
+    const auto res = bayes::ekfLogLikelihood(m_imm->mode(i).P, H, nu, Rdiag);
+    return res.ok ? res.logLikelihood : -std::numeric_limits<double>::infinity();
+  }
+  // S = H A P~ A^T H^T + R without forming A P~ A^T (O(n m)).
+  MatX S = transitionInnovationCovariance(m_imm->mode(i).P, L.blocks, L.blockAt, H);
+  S = 0.5 * (S + S.transpose());
+  S.diagonal() += Rdiag;
+  return math::gaussianLogLikelihood(nu, S);
+}
+
 void CMonoSlamIMM::updateBank(const std::vector<TCandidate>& cands, const std::vector<int>& which, VecX& logLik)
 {
   const int r = m_imm->numModels();
@@ -262,8 +346,7 @@ void CMonoSlamIMM::updateBank(const std::vector<TCandidate>& cands, const std::v
       bayes::CSparseJacobian H;
       VecX nu;
       buildMeasurement(m_imm->mode(i), cands, use, H, nu);
-      const auto res = bayes::ekfLogLikelihood(m_imm->mode(i).P, H, nu, Rdiag);
-      ll[i] = res.ok ? res.logLikelihood : kNoLik;
+      ll[i] = modeLogLikelihood(i, H, nu, Rdiag);
     });
     VecX a(r);
     for (int i = 0; i < r; ++i) a[i] = std::log(std::max(m_imm->predictedProbabilities()[i], 1e-300)) + ll[i];
@@ -294,6 +377,7 @@ void CMonoSlamIMM::updateBank(const std::vector<TCandidate>& cands, const std::v
     m_pool->parallelFor(0, r, [&](int i) {
       logLik[i] += ll[i];
       if (m_dormant[i]) return;  // stays at its prediction
+      materialize(i);            // a lazy mode the frame makes active
       auto& g = m_imm->mode(i);
       bayes::CSparseJacobian H;
       VecX nu;
@@ -322,10 +406,10 @@ void CMonoSlamIMM::updateBank(const std::vector<TCandidate>& cands, const std::v
       if (m_dormant[i])
       {
         buildMeasurement(g, cands, joint, H, nu);
-        const auto res = bayes::ekfLogLikelihood(g.P, H, nu, RdiagJoint);
-        logLik[i] = res.ok ? res.logLikelihood : kNoLik;
+        logLik[i] = modeLogLikelihood(i, H, nu, RdiagJoint);
         return;
       }
+      materialize(i);
       buildMeasurement(g, cands, use, H, nu);
       const auto res = bayes::ekfUpdate(g.x, g.P, H, nu, Rdiag);
       logLik[i] += res.ok ? res.logLikelihood : kNoLik;
@@ -340,8 +424,13 @@ void CMonoSlamIMM::settleDormantModes()
 {
   const int r = m_imm->numModels();
   m_report.nDormantModes = 0;
-  for (int i = 0; i < r; ++i) m_report.nDormantModes += m_dormant[i] ? 1 : 0;
-  if (m_report.nDormantModes == 0) return;
+  m_report.nLazyModes = 0;
+  for (int i = 0; i < r; ++i)
+  {
+    m_report.nDormantModes += m_dormant[i] ? 1 : 0;
+    m_report.nLazyModes += m_dormant[i] && m_lazy[i].active ? 1 : 0;
+  }
+  m_wasDormant = m_dormant;
   // Source of each dormant mode: the most probable updated mode of an equal or richer family.
   const VecX& mu = m_imm->probabilities();
   std::vector<int> source(r, -1);
@@ -352,9 +441,14 @@ void CMonoSlamIMM::settleDormantModes()
             (source[i] < 0 || mu[j] > mu[source[i]]))
           source[i] = j;
   m_pool->parallelFor(0, r, [&](int i) {
-    if (source[i] < 0) return;
+    if (source[i] < 0)
+    {
+      materialize(i);  // a lazy mode of a frame without measurements: its prediction is its posterior
+      return;
+    }
     m_imm->mode(i).x = m_imm->mode(source[i]).x;
     m_imm->mode(i).P = m_imm->mode(source[i]).P;
+    m_lazy[i].active = false;
   });
   std::fill(m_dormant.begin(), m_dormant.end(), 0);
 }
@@ -378,6 +472,7 @@ std::vector<int> CMonoSlamIMM::rescue(const std::vector<TCandidate>& cands, cons
     Mat2 S = Mat2::Zero();
     for (int i = 0; i < r; ++i)
     {
+      if (!(w[i] > 0)) continue;  // (dormant modes: still at their prediction)
       const auto& g = m_imm->mode(i);
       S += w[i] * innovationCovariance(g.P.block(f.offset, f.offset, f.dim(), f.dim()), Jf, 0.0);
       if (r > 1)

@@ -124,6 +124,7 @@ void TIMMBankOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c,
   IMMSLAM_LOAD_VECTOR(prior);
   IMMSLAM_LOAD_DOUBLE(probability_floor);
   IMMSLAM_LOAD_DOUBLE(dormant_below);
+  IMMSLAM_LOAD_BOOL(lazy_prediction);
   const int r = static_cast<int>(parseModels().size());
   transitionMatrix(r);  // validates
   priorProbabilities(r);
@@ -154,6 +155,7 @@ void TIMMBankOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const s
           "initial model probabilities ([] = uniform)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(probability_floor, "lower bound of every model probability");
   MRPT_SAVE_CONFIG_VAR_COMMENT(dormant_below, "modes below this probability given the frame are not updated (0 = exact IMM)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(lazy_prediction, "modes dormant in the previous frame: covariance predicted only if needed (exact)");
 }
 
 std::vector<motion::TMotionModel> TIMMBankOptions::parseModels() const

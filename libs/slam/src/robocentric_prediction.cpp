@@ -4,6 +4,7 @@
 #include <immslam/slam/robocentric_prediction.h>
 
 #include <Eigen/Cholesky>
+#include <stdexcept>
 
 namespace immslam::slam
 {
@@ -11,15 +12,7 @@ namespace
 {
 constexpr int kU = motion::kV;  // velocities u = (v, w) at 7..12
 
-/** Transition Jacobian of one row block: D (own columns, s x s) and G (velocity columns, s x 6),
- * stored in fixed-size buffers (s <= 7). */
-struct TBlockJac
-{
-  int off = 0, len = 0;
-  bool hasG = true;
-  Eigen::Matrix<double, 7, 7> D;
-  Eigen::Matrix<double, 7, 6> G;
-};
+using TBlockJac = TTransitionBlock;
 /** Rows of one block of M = A P~: M_b = D_b P~_b + G_b P~_u (S = block size). */
 template <int S>
 void rowBlock(const TBlockJac& b, const MatX& P, const Eigen::Ref<const MatX>& Pu, MatX& M)
@@ -100,9 +93,16 @@ void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& featur
     g.P.triangularView<Eigen::StrictlyUpper>() = g.P.transpose();
     return;
   }
+  thread_local std::vector<TTransitionBlock> blocks;
+  predictRobocentricMean(g, features, inc, blocks);
+  applyRobocentricTransition(g.P, blocks, scratch);
+}
+
+void predictRobocentricMean(bayes::TGaussian& g, const std::vector<TFeature>& features,
+                            const motion::TMotionIncrement& inc, std::vector<TTransitionBlock>& blocks)
+{
   const Vec3& t = inc.t;
   const Vec4& dq = inc.dq;
-  thread_local std::vector<TBlockJac> blocks;
   blocks.clear();
   blocks.reserve(features.size() + 2);
 
@@ -164,28 +164,104 @@ void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& featur
 
   // The impulses act like a perturbation of u: P~ = P + E N E^T.
   g.P.block<6, 6>(kU, kU) += inc.noiseCov;
+}
+
+void applyRobocentricTransition(MatX& P, const std::vector<TTransitionBlock>& blocks, MatX& scratch)
+{
+  const Eigen::Index n = P.rows();
   // M = A P~ (row blocks), then P' = M A^T, lower triangle only (column blocks), then mirrored.
   // Fixed-size kernels per block size: tiny dynamic products would go through GEMM packing.
   scratch.resize(n, n);
-  const auto Pu = g.P.middleRows<6>(kU);
+  const auto Pu = P.middleRows<6>(kU);
   for (const auto& b : blocks)
   {
     switch (b.len)
     {
-      case 3: rowBlock<3>(b, g.P, Pu, scratch); break;
-      case 6: rowBlock<6>(b, g.P, Pu, scratch); break;
-      default: rowBlock<7>(b, g.P, Pu, scratch); break;
+      case 3: rowBlock<3>(b, P, Pu, scratch); break;
+      case 6: rowBlock<6>(b, P, Pu, scratch); break;
+      default: rowBlock<7>(b, P, Pu, scratch); break;
     }
   }
   for (const auto& b : blocks)
   {
     switch (b.len)
     {
-      case 3: colBlock<3>(b, scratch, g.P); break;
-      case 6: colBlock<6>(b, scratch, g.P); break;
-      default: colBlock<7>(b, scratch, g.P); break;
+      case 3: colBlock<3>(b, scratch, P); break;
+      case 6: colBlock<6>(b, scratch, P); break;
+      default: colBlock<7>(b, scratch, P); break;
     }
   }
-  g.P.triangularView<Eigen::StrictlyUpper>() = g.P.transpose();
+  P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
+}
+
+MatX transitionColumns(const MatX& Pt, const std::vector<TTransitionBlock>& blocks, int bi)
+{
+  const TTransitionBlock& b = blocks[bi];
+  const Eigen::Index n = Pt.rows();
+  // Y = P~ A_b^T (n x len), then A Y block row by block row.
+  MatX Y = Pt.middleCols(b.off, b.len) * b.D.topLeftCorner(b.len, b.len).transpose();
+  if (b.hasG) Y.noalias() += Pt.middleCols<6>(kU) * b.G.topRows(b.len).transpose();
+  MatX out(n, b.len);
+  for (const auto& a : blocks)
+  {
+    out.middleRows(a.off, a.len).noalias() = a.D.topLeftCorner(a.len, a.len) * Y.middleRows(a.off, a.len);
+    if (a.hasG) out.middleRows(a.off, a.len).noalias() += a.G.topRows(a.len) * Y.middleRows<6>(kU);
+  }
+  return out;
+}
+
+MatX transitionBlock(const MatX& Pt, const TTransitionBlock& b)
+{
+  const auto D = b.D.topLeftCorner(b.len, b.len);
+  MatX out = D * Pt.block(b.off, b.off, b.len, b.len) * D.transpose();
+  if (b.hasG)
+  {
+    const auto G = b.G.topRows(b.len);
+    const MatX DC = D * Pt.block(b.off, kU, b.len, 6) * G.transpose();
+    out += DC + DC.transpose();
+    out.noalias() += G * Pt.block<6, 6>(kU, kU) * G.transpose();
+  }
+  return out;
+}
+
+MatX transitionInnovationCovariance(const MatX& Pt, const std::vector<TTransitionBlock>& blocks,
+                                    const std::vector<int>& blockAt, const bayes::CSparseJacobian& H)
+{
+  const Eigen::Index n = Pt.rows();
+  const int m = H.rows();
+  // Rows of H A: a block J on transition block b gives J D_b on b's columns and J G_b on u.
+  struct TRow
+  {
+    int row, b;
+    MatX JD, JG;
+  };
+  std::vector<TRow> rows;
+  rows.reserve(H.blocks().size());
+  for (const auto& hb : H.blocks())
+  {
+    const int bi = hb.col < static_cast<int>(blockAt.size()) ? blockAt[hb.col] : -1;
+    if (bi < 0 || blocks[bi].len != hb.J.cols())
+      throw std::logic_error("transitionInnovationCovariance: a block of H is not one transition block");
+    const TTransitionBlock& b = blocks[bi];
+    TRow r{hb.row, bi, hb.J * b.D.topLeftCorner(b.len, b.len), MatX()};
+    if (b.hasG) r.JG = hb.J * b.G.topRows(b.len);
+    rows.push_back(std::move(r));
+  }
+  // Y = P~ (H A)^T (n x m), S = (H A) Y.
+  MatX Y = MatX::Zero(n, m);
+  for (const auto& r : rows)
+  {
+    const TTransitionBlock& b = blocks[r.b];
+    Y.middleCols(r.row, r.JD.rows()).noalias() += Pt.middleCols(b.off, b.len) * r.JD.transpose();
+    if (b.hasG) Y.middleCols(r.row, r.JD.rows()).noalias() += Pt.middleCols<6>(kU) * r.JG.transpose();
+  }
+  MatX S = MatX::Zero(m, m);
+  for (const auto& r : rows)
+  {
+    const TTransitionBlock& b = blocks[r.b];
+    S.middleRows(r.row, r.JD.rows()).noalias() += r.JD * Y.middleRows(b.off, b.len);
+    if (b.hasG) S.middleRows(r.row, r.JD.rows()).noalias() += r.JG * Y.middleRows<6>(kU);
+  }
+  return S;
 }
 }  // namespace immslam::slam

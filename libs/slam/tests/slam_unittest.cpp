@@ -130,6 +130,60 @@ TEST(Prediction, CamCentredCovarianceMatchesNumericalTransition)
   }
 }
 
+TEST(Prediction, LazyTransitionBlocksMatchTheFullPrediction)
+{
+  // The deferred form (mean + transition blocks + P~) gives the same blocks, columns and H P' H^T as
+  // the full prediction, and applying it later gives the same P'.
+  TToyState s;
+  s.x.segment<3>(7) << 0.01, -0.02, 0.015;
+  s.x.segment<3>(10) << 0.02, 0.01, -0.03;
+  std::mt19937 rng(19);
+  std::normal_distribution<double> g;
+  const int n = static_cast<int>(s.x.size());
+  MatX A(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) A(i, j) = 0.1 * g(rng);
+  const MatX P0 = A * A.transpose();
+  for (const auto* spec : {"general:1", "rotation:0.5"})
+  {
+    TIMMBankOptions b;
+    b.models = spec;
+    const auto model = b.parseModels()[0];
+    const auto inc = motion::motionIncrement(model, s.x.segment<3>(7), s.x.segment<3>(10), 1.0, 200);
+    bayes::TGaussian full{s.x, P0}, lazy{s.x, P0};
+    MatX scratch;
+    predictRobocentric(full, s.feats, inc, scratch);
+    std::vector<TTransitionBlock> blocks;
+    predictRobocentricMean(lazy, s.feats, inc, blocks);
+    EXPECT_EQ(lazy.x, full.x) << spec;
+    ASSERT_EQ(blocks.size(), s.feats.size() + 2);
+    std::vector<int> blockAt(n, -1);
+    for (int k = 0; k < static_cast<int>(blocks.size()); ++k) blockAt[blocks[k].off] = k;
+    const double tol = 1e-12 * full.P.norm();
+    for (int k = 0; k < static_cast<int>(blocks.size()); ++k)
+    {
+      const auto& bk = blocks[k];
+      EXPECT_LT((transitionBlock(lazy.P, bk) - full.P.block(bk.off, bk.off, bk.len, bk.len)).norm(), tol) << spec << k;
+      EXPECT_LT((transitionColumns(lazy.P, blocks, k) - full.P.middleCols(bk.off, bk.len)).norm(), tol) << spec << k;
+    }
+    // H on the features (2 rows each), as the SLAM measurement.
+    bayes::CSparseJacobian H(2 * static_cast<int>(s.feats.size()), n);
+    for (int k = 0; k < static_cast<int>(s.feats.size()); ++k)
+    {
+      MatX J(2, s.feats[k].dim());
+      for (int c = 0; c < J.size(); ++c) J.data()[c] = g(rng);
+      H.addBlock(2 * k, s.feats[k].offset, J);
+    }
+    const MatX Sref = H.times(H.timesTransposedBy(full.P));
+    EXPECT_LT((transitionInnovationCovariance(lazy.P, blocks, blockAt, H) - Sref).norm(), 1e-12 * Sref.norm()) << spec;
+    bayes::CSparseJacobian bad(2, n);
+    bad.addBlock(0, 0, MatX::Ones(2, 3));  // part of the world pose block
+    EXPECT_THROW(transitionInnovationCovariance(lazy.P, blocks, blockAt, bad), std::logic_error);
+    applyRobocentricTransition(lazy.P, blocks, scratch);
+    EXPECT_LT((lazy.P - full.P).norm(), tol) << spec;
+  }
+}
+
 TEST(Prediction, StationaryJitterCovariance)
 {
   // Stationary with angular jitter: P' = P (velocities zeroed) + B N B^T, B = d f(x, n)/dn.
@@ -233,7 +287,8 @@ namespace
 {
 /** One Monte Carlo run of the measurement-level simulation; returns the pose NEES per frame. */
 std::vector<double> simulateRun(unsigned seed, int nFrames, const std::string& models, double rhoStd,
-                                double* rmsPos = nullptr, double dormantBelow = -1, int* nDormant = nullptr)
+                                double* rmsPos = nullptr, double dormantBelow = -1, int* nDormant = nullptr,
+                                bool lazy = true)
 {
   const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
   std::mt19937 rng(seed);
@@ -250,6 +305,7 @@ std::vector<double> simulateRun(unsigned seed, int nFrames, const std::string& m
   TIMMBankOptions b;
   b.models = models;
   if (dormantBelow >= 0) b.dormant_below = dormantBelow;
+  b.lazy_prediction = lazy;
   CMonoSlamIMM slam(o, b, COnePointRansac::TOptions(), cam);
 
   const double f = 200, sv = o.init_linear_velocity_std_px / f, sw = o.init_angular_velocity_std_px / f;
@@ -366,6 +422,13 @@ TEST(IMMSlam, DormantModesKeepTheExactBanksEstimate)
   double na = 0, nb = 0;
   for (std::size_t k = 0; k < a.size(); ++k) na += a[k], nb += b[k];
   EXPECT_NEAR(nb, na, 0.2 * na);
+  // Lazy prediction is exact: the same run without it gives the same numbers (up to rounding).
+  double rmsEager = 0;
+  int dormantEager = 0;
+  const auto c = simulateRun(11, 60, bank, 0.05, &rmsEager, 1e-5, &dormantEager, false);
+  EXPECT_EQ(dormantEager, dormant);
+  EXPECT_NEAR(rmsEager, rmsDormant, 1e-9 * rmsDormant);
+  for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(c[k], b[k], 1e-6 * (1 + b[k]));
   std::printf("7-model bank, 60 frames: %.2f dormant modes per frame, position RMS %.5f (exact %.5f), "
               "mean pose NEES %.2f (exact %.2f)\n",
               dormant / 60.0, rmsDormant, rmsExact, nb / a.size(), na / a.size());

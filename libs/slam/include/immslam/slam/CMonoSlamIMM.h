@@ -29,6 +29,7 @@
 #include <immslam/motion/motion_models.h>
 #include <immslam/slam/COnePointRansac.h>
 #include <immslam/slam/TFeature.h>
+#include <immslam/slam/robocentric_prediction.h>
 
 #include <mrpt/config/CLoadableOptions.h>
 #include <opencv2/core/mat.hpp>
@@ -100,6 +101,7 @@ struct TFrameReport
   // Stage timings (ms)
   double tPredictMs = 0, tSearchMs = 0, tRansacMs = 0, tUpdateMs = 0, tMapMs = 0;
   int nDormantModes = 0;     ///< IMM modes not updated this frame (TIMMBankOptions::dormant_below)
+  int nLazyModes = 0;        ///< of them, modes whose covariance was not predicted either (lazy_prediction)
   std::vector<TSearchRecord> searches;
 };
 
@@ -129,6 +131,12 @@ struct TIMMBankOptions : public mrpt::config::CLoadableOptions
    * (doc/imm.md): 1e-5 gave the exact IMM's ATE within 2.3 % on 9 of 11 rendered sequences (better on 2);
    * 1e-4 failed on one of them (3.1 % vs 0.75 % of path), 1e-3 on another (9.4 % vs 1.2 %). */
   double dormant_below = 1e-5;
+  /** Lazy prediction (with dormant_below > 0): a moving mode that was dormant in the previous frame gets
+   * its predicted mean and the blocks of its transition only; the blocks of its predicted covariance
+   * that the frame reads (search regions, RANSAC columns, its likelihood) are computed from them in
+   * O(n) each, and the O(n^2) covariance prediction runs only if the frame makes it active. Exact: the
+   * same numbers as the full prediction, up to rounding. */
+  bool lazy_prediction = true;
 
   void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
   void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
@@ -263,6 +271,8 @@ class CMonoSlamIMM
   /** The measurement of mode g for the candidates `use`: innovation nu and sparse Jacobian H. */
   void buildMeasurement(const bayes::TGaussian& g, const std::vector<TCandidate>& cands, const std::vector<int>& use,
                         bayes::CSparseJacobian& H, VecX& nu) const;
+  /** ln N(nu; 0, H P_i H^T + R) of mode i's prediction (lazy modes from their transition blocks). */
+  double modeLogLikelihood(int i, const bayes::CSparseJacobian& H, const VecX& nu, const VecX& Rdiag) const;
   /** Dormant modes take the posterior of the most probable updated mode (after updateProbabilities). */
   void settleDormantModes();
   std::vector<int> rescue(const std::vector<TCandidate>& cands, const std::vector<char>& used);
@@ -272,8 +282,13 @@ class CMonoSlamIMM
   void refreshFused();
   void estimateMeasurementNoise(const std::vector<TCandidate>& cands, const std::vector<int>& inliers);
   /** Blocks and columns of the fused predicted covariance (eq. 11), never formed whole. */
-  MatX predictedCovBlock(int off, int len) const;
-  MatX predictedCovColumns(int off, int len) const;
+  MatX predictedCovBlock(int off, int len);
+  MatX predictedCovColumns(int off, int len);
+  /** Mode i's predicted covariance: rows/columns of one state block, from the lazy form if it has one. */
+  MatX modePredictedBlock(int i, int off, int len);
+  MatX modePredictedColumns(int i, int off, int len);
+  /** Runs the deferred covariance prediction of a lazy mode (no-op otherwise). */
+  void materialize(int i);
   void updateWorldPose();
   double frameDt(double timestamp);
 
@@ -292,6 +307,16 @@ class CMonoSlamIMM
   bool m_dormantDecided = false;  ///< the frame's dormant set is chosen (first update of the frame done)
   std::vector<char> m_dormant;    ///< per mode: not updated this frame
   std::vector<int> m_dormantUse;  ///< candidates whose likelihood the dormant modes already include
+  bool m_lazyPrediction = false;  ///< TIMMBankOptions::lazy_prediction (and dormant modes on)
+  std::vector<char> m_wasDormant; ///< per mode: dormant in the previous frame
+  /** A mode whose covariance prediction is deferred: its P holds P~ = P + E N E^T of the mixed P. */
+  struct TLazyMode
+  {
+    bool active = false;
+    std::vector<TTransitionBlock> blocks;
+    std::vector<int> blockAt;  ///< transition block of each state offset, -1 elsewhere
+  };
+  std::vector<TLazyMode> m_lazy;
   Vec3 m_rWC = Vec3::Zero();    ///< fused camera pose T_W_C
   Vec4 m_qWC = Vec4(1, 0, 0, 0);
   TFrameReport m_report;

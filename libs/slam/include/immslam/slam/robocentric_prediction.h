@@ -4,6 +4,7 @@
 #pragma once
 
 #include <immslam/bayes/CIMMEstimator.h>
+#include <immslam/bayes/ekf_update.h>
 #include <immslam/motion/motion_models.h>
 #include <immslam/slam/TFeature.h>
 
@@ -17,4 +18,33 @@ namespace immslam::slam
  * the velocities. \param scratch an n x n buffer reused between calls. */
 void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& features,
                         const motion::TMotionIncrement& inc, MatX& scratch);
+
+/** One block row of the transition A: rows [off, off + len) of A hold D (len x len) on the block's own
+ * columns and, if hasG, G (len x 6) on the velocity columns u; zeros elsewhere (len <= 7). */
+struct TTransitionBlock
+{
+  int off = 0, len = 0;
+  bool hasG = true;
+  Eigen::Matrix<double, 7, 7> D = Eigen::Matrix<double, 7, 7>::Zero();
+  Eigen::Matrix<double, 7, 6> G = Eigen::Matrix<double, 7, 6>::Zero();
+};
+
+/** The prediction of a moving model (inc.identity false) split in two, so the covariance part can be
+ * deferred (lazy modes of the IMM, CMonoSlamIMM): the mean x' = f(x, u), the transition blocks of A
+ * (the world pose, the velocities, then one block per feature in `features` order) and
+ * P~ = P + E N E^T (in place). predictRobocentric() = this + applyRobocentricTransition(). */
+void predictRobocentricMean(bayes::TGaussian& g, const std::vector<TFeature>& features,
+                            const motion::TMotionIncrement& inc, std::vector<TTransitionBlock>& blocks);
+/** P <- A P~ A^T (exactly symmetric), O(n sum_b (s_b^2 + 6 s_b)). */
+void applyRobocentricTransition(MatX& P, const std::vector<TTransitionBlock>& blocks, MatX& scratch);
+/** Columns of block b of A P~ A^T (n x len_b), without forming it: O(n len_b (len_b + 6)). */
+MatX transitionColumns(const MatX& Pt, const std::vector<TTransitionBlock>& blocks, int b);
+/** Diagonal block of A P~ A^T for one transition block: O(len^2 (len + 6)). */
+MatX transitionBlock(const MatX& Pt, const TTransitionBlock& blk);
+/** H A P~ A^T H^T for a measurement Jacobian whose blocks each lie on one transition block (the
+ * features): O(n m (len + 6)) instead of the O(n^2) of forming A P~ A^T. \param blockAt transition block
+ * index of each state offset (-1 elsewhere). 	hrows std::logic_error if a block of H is not one
+ * transition block. */
+MatX transitionInnovationCovariance(const MatX& Pt, const std::vector<TTransitionBlock>& blocks,
+                                    const std::vector<int>& blockAt, const bayes::CSparseJacobian& H);
 }  // namespace immslam::slam
