@@ -92,19 +92,34 @@ TEST(Measurement, WorldPoseInversionJacobian)
   EXPECT_LT((Jn - J).norm(), 1e-7);
 }
 
-TEST(Prediction, CamCentredCovarianceMatchesNumericalTransition)
+namespace
 {
-  // P' = A (P + E N E^T) A^T with A the Jacobian of the whole transition x' = f(x).
+/** The toy state with non-zero velocities. */
+TToyState movingToyState()
+{
   TToyState s;
   s.x.segment<3>(7) << 0.01, -0.02, 0.015;
   s.x.segment<3>(10) << 0.02, 0.01, -0.03;
-  std::mt19937 rng(9);
+  return s;
+}
+/** A dense random covariance A A^T (entries of A ~ N(0, 0.01)). */
+MatX randomCovariance(int n, std::mt19937& rng)
+{
   std::normal_distribution<double> g;
-  const int n = static_cast<int>(s.x.size());
   MatX A(n, n);
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) A(i, j) = 0.1 * g(rng);
-  const MatX P0 = A * A.transpose();
+  return A * A.transpose();
+}
+}  // namespace
+
+TEST(Prediction, CamCentredCovarianceMatchesNumericalTransition)
+{
+  // P' = A (P + E N E^T) A^T with A the Jacobian of the whole transition x' = f(x).
+  const TToyState s = movingToyState();
+  std::mt19937 rng(9);
+  const int n = static_cast<int>(s.x.size());
+  const MatX P0 = randomCovariance(n, rng);
   for (const auto* spec : {"general:1", "rotation:0.5", "stationary"})
   {
     TIMMBankOptions b;
@@ -134,16 +149,11 @@ TEST(Prediction, LazyTransitionBlocksMatchTheFullPrediction)
 {
   // The deferred form (mean + transition blocks + P~) gives the same blocks, columns and H P' H^T as
   // the full prediction, and applying it later gives the same P'.
-  TToyState s;
-  s.x.segment<3>(7) << 0.01, -0.02, 0.015;
-  s.x.segment<3>(10) << 0.02, 0.01, -0.03;
+  const TToyState s = movingToyState();
   std::mt19937 rng(19);
   std::normal_distribution<double> g;
   const int n = static_cast<int>(s.x.size());
-  MatX A(n, n);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) A(i, j) = 0.1 * g(rng);
-  const MatX P0 = A * A.transpose();
+  const MatX P0 = randomCovariance(n, rng);
   for (const auto* spec : {"general:1", "rotation:0.5"})
   {
     TIMMBankOptions b;
