@@ -211,15 +211,15 @@ void CMonoSlamIMM::searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& 
     if (!m_features[k].patch.valid()) continue;
     if (!predictMeasurement(*m_cam, m_xPred, m_features[k], j.h, &j.Jf)) continue;
     if (!m_cam->isInImage(j.h, margin)) continue;
-    // S_i = H_i P H_i^T + R with the fused P (eq. 14): only the feature's own block is needed.
-    const TFeature& f = m_features[k];
-    j.S = innovationCovariance(predictedCovBlock(f.offset, f.dim()), j.Jf, m_sigmaPixel);
     jobs.push_back(j);
   }
   std::vector<cv::Mat> templates(jobs.size());
   m_pool->parallelFor(0, static_cast<int>(jobs.size()), [&](int idx) {
     TJob& j = jobs[idx];
     const TFeature& f = m_features[j.k];
+    // S_i = H_i P H_i^T + R with the fused P (eq. 14): only the feature's own block is needed (a
+    // feature block: read-only, also for lazy modes).
+    j.S = innovationCovariance(predictedCovBlock(f.offset, f.dim()), j.Jf, m_sigmaPixel);
     Mat2 A = Mat2::Identity();
     if (m_opts.warp_patches)
     {
