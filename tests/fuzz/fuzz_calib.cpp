@@ -35,7 +35,16 @@ void checkModel(const camera::CCameraModel& cam, const std::string& context)
   Mat23 J;
   cam.project(Vec3(0.01, -0.02, 1.0), uv, &J);
   (void)cam.isInImage(uv, 3.0);
-  (void)cam.scaled(0.5);
+  try
+  {
+    (void)cam.scaled(0.5);
+  }
+  catch (const std::exception& e)
+  {
+    // Only a parameter that overflows when rescaled (e.g. davison kd1 = 1e308: kd1 / s^2) may refuse,
+    // and the error must say which model and which scale.
+    requireMentions(e, cam.modelName() + " camera: scaling by 0.5", context + " scaled(0.5)");
+  }
 }
 }  // namespace
 

@@ -10,24 +10,20 @@
 
 namespace immslam::camera
 {
-namespace
+namespace detail
 {
-/** Shortest decimal text that reads back to exactly the same double (locale independent). */
 std::string exactText(double v)
 {
   char buf[64];
   const auto res = std::to_chars(buf, buf + sizeof(buf), v);
   return std::string(buf, res.ptr);
 }
-}  // namespace
 
-namespace detail
-{
 void checkScale(double s, const std::string& model)
 {
   if (!(s > 0) || !std::isfinite(s))
     throw std::runtime_error(model + " camera: scale factor must be positive and finite, got " +
-                             exactText(s));
+                             detail::exactText(s));
 }
 
 int scaleSize(int n, double s) { return std::max(1, static_cast<int>(std::lround(s * n))); }
@@ -40,11 +36,11 @@ CCameraModel::CCameraModel(int width, int height, double fx, double fy, double c
   if (height <= 0)
     throw std::runtime_error("camera: height must be positive, got " + std::to_string(height));
   if (!(fx > 0) || !std::isfinite(fx))
-    throw std::runtime_error("camera: fx must be positive and finite, got " + exactText(fx));
+    throw std::runtime_error("camera: fx must be positive and finite, got " + detail::exactText(fx));
   if (!(fy > 0) || !std::isfinite(fy))
-    throw std::runtime_error("camera: fy must be positive and finite, got " + exactText(fy));
-  if (!std::isfinite(cx)) throw std::runtime_error("camera: cx must be finite, got " + exactText(cx));
-  if (!std::isfinite(cy)) throw std::runtime_error("camera: cy must be finite, got " + exactText(cy));
+    throw std::runtime_error("camera: fy must be positive and finite, got " + detail::exactText(fy));
+  if (!std::isfinite(cx)) throw std::runtime_error("camera: cx must be finite, got " + detail::exactText(cx));
+  if (!std::isfinite(cy)) throw std::runtime_error("camera: cy must be finite, got " + detail::exactText(cy));
 }
 
 bool CCameraModel::isInImage(const Vec2& uv, double margin) const
@@ -56,7 +52,7 @@ bool CCameraModel::isInImage(const Vec2& uv, double margin) const
 std::string CCameraModel::toCalibLine() const
 {
   std::string line = modelName() + " " + std::to_string(m_width) + " " + std::to_string(m_height);
-  for (const double p : parameters()) line += " " + exactText(p);
+  for (const double p : parameters()) line += " " + detail::exactText(p);
   return line;
 }
 }  // namespace immslam::camera

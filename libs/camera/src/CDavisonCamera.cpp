@@ -74,8 +74,12 @@ CCameraModel::Ptr CDavisonCamera::scaled(double s) const
 {
   detail::checkScale(s, modelName());
   // Pixel offsets scale by s, so r_d(s r_u) = s r_d(r_u) needs kd1 / s^2.
+  const double kd1 = m_kd1 / (s * s);
+  if (!std::isfinite(kd1))
+    throw std::runtime_error(modelName() + " camera: scaling by " + detail::exactText(s) + " turns kd1 " +
+                             detail::exactText(m_kd1) + " into a non-finite kd1 / s^2");
   return std::make_shared<CDavisonCamera>(detail::scaleSize(m_width, s),
       detail::scaleSize(m_height, s), s * m_fx, s * m_fy, detail::scalePixel(m_cx, s),
-      detail::scalePixel(m_cy, s), m_kd1 / (s * s));
+      detail::scalePixel(m_cy, s), kd1);
 }
 }  // namespace immslam::camera

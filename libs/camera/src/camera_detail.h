@@ -43,6 +43,9 @@ inline math::Bearing bearingOfNormalized(const Vec2& n, const Mat2& J_n_uv, Mat3
 /** Throws std::runtime_error naming the model unless s is a positive finite scale factor. */
 void checkScale(double s, const std::string& model);
 
+/** Shortest decimal text that reads back to exactly the same double (locale independent). */
+std::string exactText(double v);
+
 /** A pixel coordinate after resampling by s (pixel-centre convention): s (c + 0.5) - 0.5. */
 inline double scalePixel(double c, double s) { return s * (c + 0.5) - 0.5; }
 

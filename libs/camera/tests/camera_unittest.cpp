@@ -354,3 +354,19 @@ TEST(DavisonCamera, MatchesTheReadmeFormulaAndScalesKd1)
   EXPECT_EQ(sc->parameters()[4], -0.28340811);
   EXPECT_EQ(sc->k2(), 0.07395907);
 }
+
+TEST(DavisonCamera, ScalingThatOverflowsKd1IsRefusedWithAClearError)
+{
+  // Found by fuzz_calib: kd1 = 1e308 is finite, kd1 / 0.5^2 is not.
+  const CDavisonCamera cam(80, 240, 195, 195, 162, 125, 1e308);
+  try
+  {
+    (void)cam.scaled(0.5);
+    FAIL() << "scaled(0.5) accepted a non-finite kd1";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("davison camera: scaling by 0.5"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW((void)cam.scaled(2.0));  // kd1 / 4 stays finite
+}

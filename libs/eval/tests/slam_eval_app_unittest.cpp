@@ -135,10 +135,10 @@ TEST(SlamEvalApp, TracksAgainstPointsAfterTheCameraAlignment)
                                  std::string& report) {
     seenFolder = f;
     report = "fake truth";
-    std::vector<TGroundTruthPoint> pts;
+    std::vector<TGroundTruthPoint> truthPts;
     for (const auto& t : samples)
-      if (t.featureId == 12) pts.push_back(TGroundTruthPoint{t.timestamp, 0, true, 2 * t.p_W, t.uv});
-    return pts;
+      if (t.featureId == 12) truthPts.push_back(TGroundTruthPoint{t.timestamp, 0, true, 2 * t.p_W, t.uv});
+    return truthPts;
   };
   std::ostringstream o, e2;
   ASSERT_EQ(runSlamEvalApp({"slam-eval", "tracks", tr, folder, "--est", e}, o, e2, truth), 0) << e2.str();

@@ -31,8 +31,7 @@ struct TAabb
 };
 }  // namespace
 
-int CWorld::addSurfaces(const Vec3& half, std::uint64_t seedBase, bool isRoom, const TScenario& sc,
-                        double shapesPerUnit2, double texelsPerUnit)
+int CWorld::addSurfaces(const Vec3& half, std::uint64_t seedBase, bool isRoom, double shapesPerUnit2, double texelsPerUnit)
 {
   const int first = static_cast<int>(m_surfaces.size());
   for (int f = 0; f < 6; ++f)
@@ -60,7 +59,7 @@ CWorld::CWorld(const TScenario& sc)
   m_room.T_W_B.t = 0.5 * (sc.room_min + sc.room_max);
   m_room.half = 0.5 * (sc.room_max - sc.room_min);
   m_room.inside = true;
-  m_room.firstSurface = addSurfaces(m_room.half, CRandom::streamSeed(sc.seed, "room"), true, sc, sc.shapes_per_unit2,
+  m_room.firstSurface = addSurfaces(m_room.half, CRandom::streamSeed(sc.seed, "room"), true, sc.shapes_per_unit2,
                                     sc.texels_per_unit);
 
   // Static boxes: rejection sampling from the layout stream.
@@ -126,7 +125,7 @@ CWorld::CWorld(const TScenario& sc)
     }
   }
   for (std::size_t i = 0; i < m_static.size(); ++i)
-    m_static[i].firstSurface = addSurfaces(m_static[i].half, CRandom::streamSeed(sc.seed, "box", i), false, sc,
+    m_static[i].firstSurface = addSurfaces(m_static[i].half, CRandom::streamSeed(sc.seed, "box", i), false,
                                                sc.shapes_per_unit2, sc.texels_per_unit);
 
   // Moving objects (own texture streams, after every static surface).
@@ -135,7 +134,7 @@ CWorld::CWorld(const TScenario& sc)
     {
       m_objects.push_back(o);
       m_objectFirstSurface.push_back(
-          addSurfaces(0.5 * o.size, CRandom::streamSeed(sc.seed, "object", static_cast<std::uint64_t>(o.id)), false, sc,
+          addSurfaces(0.5 * o.size, CRandom::streamSeed(sc.seed, "object", static_cast<std::uint64_t>(o.id)), false,
                       sc.object_shapes_per_unit2, sc.object_texels_per_unit));
     }
 }

@@ -70,7 +70,7 @@ class CWorld
   bool isFree(const Vec3& p_W, double clearance) const;
 
  private:
-  int addSurfaces(const Vec3& half, std::uint64_t seedBase, bool isRoom, const TScenario& sc, double shapesPerUnit2,
+  int addSurfaces(const Vec3& half, std::uint64_t seedBase, bool isRoom, double shapesPerUnit2,
                   double texelsPerUnit);
 
   TBox m_room;
