@@ -11,7 +11,7 @@
 namespace immslam::bayes
 {
 CIMMEstimator::CIMMEstimator(const MatX& transition, const VecX& prior, double floor)
-    : m_pi(transition), m_mu(prior), m_muPred(prior), m_floor(floor)
+    : m_pi(transition), m_piStep(transition), m_mu(prior), m_muPred(prior), m_floor(floor)
 {
   const auto r = prior.size();
   if (r < 1 || transition.rows() != r || transition.cols() != r)
@@ -44,14 +44,40 @@ void CIMMEstimator::setAllModes(const VecX& x, const MatX& P)
   for (auto& m : m_modes) m = TGaussian{x, P};
 }
 
-void CIMMEstimator::mix(math::CThreadPool* pool)
+MatX CIMMEstimator::transitionOver(double steps) const
+{
+  if (!(steps >= 0) || !std::isfinite(steps))
+  {
+    std::ostringstream s;
+    s << "IMM: the interval of a transition must be a finite number of steps >= 0, got " << steps;
+    throw std::invalid_argument(s.str());
+  }
+  if (steps == 1.0) return m_pi;
+  const Eigen::Index r = m_pi.rows();
+  const double whole = std::floor(steps), f = steps - whole;
+  // pi^n by squaring (n <= 2^53: at most ~106 products of r x r matrices).
+  MatX result = MatX::Identity(r, r), base = m_pi;
+  for (double n = whole; n >= 1; n = std::floor(n / 2))
+  {
+    if (std::fmod(n, 2.0) == 1.0) result = result * base;
+    if (n >= 2) base = base * base;
+  }
+  if (f > 0) result = result * ((1.0 - f) * MatX::Identity(r, r) + f * m_pi);
+  // Rows of a product of stochastic matrices sum to 1 up to rounding; renormalize that rounding away.
+  for (Eigen::Index j = 0; j < r; ++j) result.row(j) /= result.row(j).sum();
+  return result;
+}
+
+void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
 {
   const int r = numModels();
+  m_piStep = transitionOver(steps);
+  const MatX& pi = m_piStep;
   // mu_{k|k-1}^i = sum_j pi_ji mu^j (eq. 7)
-  m_muPred = m_pi.transpose() * m_mu;
+  m_muPred = pi.transpose() * m_mu;
   for (int i = 0; i < r; ++i)
     for (int j = 0; j < r; ++j)
-      m_mixW(j, i) = m_muPred[i] > 0 ? m_pi(j, i) * m_mu[j] / m_muPred[i] : (i == j ? 1.0 : 0.0);
+      m_mixW(j, i) = m_muPred[i] > 0 ? pi(j, i) * m_mu[j] / m_muPred[i] : (i == j ? 1.0 : 0.0);
   if (r == 1) return;
 
   const Eigen::Index n = m_modes[0].x.size();
@@ -69,11 +95,11 @@ void CIMMEstimator::mix(math::CThreadPool* pool)
   for (int i = 0; i < r; ++i)
   {
     if (!(m_muPred[i] > 0)) continue;
-    const double beta = m_pi.col(i).minCoeff();
+    const double beta = pi.col(i).minCoeff();
     m_mixB[i] = beta / m_muPred[i];
     common = common || m_mixB[i] > 0;
     for (int j = 0; j < r; ++j)
-      if (m_mu[j] > 0) m_mixA(j, i) = (m_pi(j, i) - beta) * m_mu[j] / m_muPred[i];
+      if (m_mu[j] > 0) m_mixA(j, i) = (pi(j, i) - beta) * m_mu[j] / m_muPred[i];
   }
 
   // Means. xbar^i = sum_j W_ji x^j (as the textbook); the spreads are expanded around

@@ -9,6 +9,7 @@
 #include <immslam/math/parallel.h>
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <memory>
 #include <random>
 #include <string>
@@ -440,4 +441,64 @@ TEST(IMM, MixingWithOneModelChangesNothing)
   EXPECT_TRUE(imm.mode(0).P == modes[0].P);
   EXPECT_EQ(imm.mixingWeights()(0, 0), 1.0);
   EXPECT_EQ(imm.predictedProbabilities()[0], 1.0);
+}
+
+TEST(IMM, TransitionOverAnIntervalIsTheMatrixPower)
+{
+  const MatX pi = randomMarkov(5, 70);
+  CIMMEstimator imm(pi, VecX::Constant(5, 0.2));
+  EXPECT_TRUE(imm.transitionOver(0) == MatX::Identity(5, 5));
+  EXPECT_TRUE(imm.transitionOver(1) == pi);
+  MatX power = MatX::Identity(5, 5);
+  for (int n = 1; n <= 9; ++n)
+  {
+    power = power * pi;
+    EXPECT_LE((imm.transitionOver(n) - power).cwiseAbs().maxCoeff(), 1e-14) << "n = " << n;
+  }
+  // A fraction of a step: the chain that takes the step with that probability.
+  const MatX half = 0.5 * (MatX::Identity(5, 5) + pi);
+  EXPECT_LE((imm.transitionOver(2.5) - pi * pi * half).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_LE((imm.transitionOver(0.25) - (0.75 * MatX::Identity(5, 5) + 0.25 * pi)).cwiseAbs().maxCoeff(), 1e-15);
+  // Continuous at whole numbers; stochastic everywhere; a long interval forgets the start (every row
+  // tends to the chain's stationary distribution).
+  EXPECT_LE((imm.transitionOver(3 - 1e-9) - imm.transitionOver(3)).cwiseAbs().maxCoeff(), 1e-8);
+  for (double steps : {0.3, 1.7, 12.0, 1000.0, 1e6})
+  {
+    const MatX T = imm.transitionOver(steps);
+    EXPECT_TRUE((T.array() >= 0).all()) << steps;
+    for (int j = 0; j < 5; ++j) EXPECT_NEAR(T.row(j).sum(), 1.0, 1e-14) << steps;
+  }
+  const MatX longRun = imm.transitionOver(1e6);
+  for (int j = 1; j < 5; ++j) EXPECT_LE((longRun.row(j) - longRun.row(0)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LE((longRun.row(0) * pi - longRun.row(0)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_THROW(imm.transitionOver(-0.5), std::invalid_argument);
+  EXPECT_THROW(imm.transitionOver(std::nan("")), std::invalid_argument);
+  EXPECT_THROW(imm.transitionOver(HUGE_VAL), std::invalid_argument);
+}
+
+TEST(IMM, MixingOverSeveralStepsUsesTheMatrixOfTheInterval)
+{
+  // A frame that comes 3 steps after the last one (two dropped): predicted probabilities and mixing
+  // are those of pi^3, as the textbook mixing with pi^3 gives them.
+  const MatX pi = defaultMarkov(7, 0.9);
+  const VecX mu = randomProbabilities(7, 71);
+  const auto modes = randomModes(7, 40, 72);
+  std::vector<TGaussian> ref;
+  textbookMix(pi * pi * pi, mu, modes, ref);
+  CIMMEstimator imm(pi, mu, 0.0);
+  for (int i = 0; i < 7; ++i) imm.mode(i) = modes[i];
+  imm.mix(nullptr, 3.0);
+  EXPECT_LE((imm.predictedProbabilities() - (pi * pi * pi).transpose() * mu).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_LE((imm.lastTransition() - pi * pi * pi).cwiseAbs().maxCoeff(), 1e-15);
+  for (int i = 0; i < 7; ++i)
+  {
+    EXPECT_LE((imm.mode(i).x - ref[i].x).cwiseAbs().maxCoeff(), 1e-12 * ref[i].x.cwiseAbs().maxCoeff()) << i;
+    EXPECT_LE((imm.mode(i).P - ref[i].P).cwiseAbs().maxCoeff(), 1e-12 * ref[i].P.cwiseAbs().maxCoeff()) << i;
+  }
+  // One step is pi itself, bitwise.
+  CIMMEstimator one(pi, mu, 0.0);
+  for (int i = 0; i < 7; ++i) one.mode(i) = modes[i];
+  one.mix(nullptr, 1.0);
+  EXPECT_TRUE(one.lastTransition() == pi);
+  EXPECT_TRUE(one.predictedProbabilities() == VecX(pi.transpose() * mu));
 }

@@ -88,7 +88,7 @@ void CMonoSlamIMM::predict(double dt)
   m_dormantDecided = false;
   std::fill(m_dormant.begin(), m_dormant.end(), 0);
   m_dormantUse.clear();
-  m_imm->mix(m_pool.get());
+  m_imm->mix(m_pool.get(), dt);
   m_pool->parallelFor(0, r, [&](int i) {
     auto& g = m_imm->mode(i);
     const auto inc = motion::motionIncrement(m_models[i], g.x.segment<3>(motion::kV), g.x.segment<3>(motion::kW), dt,

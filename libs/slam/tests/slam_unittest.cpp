@@ -443,3 +443,29 @@ TEST(IMMSlam, DormantModesKeepTheExactBanksEstimate)
               "mean pose NEES %.2f (exact %.2f)\n",
               dormant / 60.0, rmsDormant, rmsExact, nb / a.size(), na / a.size());
 }
+
+TEST(IMMSlam, DroppedFramesGiveTheModesTheTimeToSwitch)
+{
+  // Frames at 30 Hz with two dropped after the third: that frame is 3 frame periods after the last
+  // one, and the bank's mixing uses pi^3 (a mode switch is as likely as over 3 frames).
+  const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
+  CMonoSlamIMM::TOptions o;
+  o.num_threads = 1;
+  TIMMBankOptions b;
+  b.models = "stationary:0.1 rotation:0.5 general:0.5";
+  b.transition_stay = 0.9;
+  CMonoSlamIMM slam(o, b, COnePointRansac::TOptions(), cam);
+  const MatX pi = b.transitionMatrix(3);
+  for (int k : {0, 1, 2, 5, 6})
+  {
+    const auto& rep = slam.processMeasurements(k / 30.0, {});
+    if (k == 0) continue;
+    const double steps = k == 5 ? 3.0 : 1.0;
+    EXPECT_DOUBLE_EQ(rep.dtFrames, steps) << "frame " << k;
+    EXPECT_LE((slam.bank().lastTransition() - slam.bank().transitionOver(steps)).cwiseAbs().maxCoeff(), 1e-15);
+    if (k == 5)
+    {
+      EXPECT_LE((slam.bank().lastTransition() - pi * pi * pi).cwiseAbs().maxCoeff(), 1e-15);
+    }
+  }
+}

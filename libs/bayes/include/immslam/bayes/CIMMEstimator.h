@@ -71,8 +71,20 @@ class CIMMEstimator
    * triangles of the r inputs read once, the r outputs written once.
    * Column chunk by column chunk: lower triangle of each column (sequential accesses), then the
    * chunk's rows of the upper triangle copied from it, so every output is exactly symmetric.
-   * \param pool optional worker pool (chunks in parallel; bitwise the same result for any pool). */
-  void mix(math::CThreadPool* pool = nullptr);
+   * \param pool optional worker pool (chunks in parallel; bitwise the same result for any pool).
+   * \param steps the time since the last update, in transition steps (frames): the Markov matrix of
+   * the interval, transitionOver(steps), replaces pi above (a dropped or skipped frame leaves two steps
+   * for the mode to switch in). 1 uses pi itself, bitwise. */
+  void mix(math::CThreadPool* pool = nullptr, double steps = 1.0);
+
+  /** The Markov matrix over an interval of `steps` transition steps: pi^n for a whole number n (by
+   * squaring), and for a fraction f of a step the "lazy chain" (1 - f) I + f pi (the chain that takes
+   * a step with probability f), so pi(n + f) = pi^n ((1 - f) I + f pi): a stochastic matrix for every
+   * steps >= 0, continuous in steps, exact at whole numbers and the identity at 0.
+   * \throws std::invalid_argument if steps is negative or not finite. */
+  MatX transitionOver(double steps) const;
+  /** The matrix the last mix() used (transitionOver(steps) of that call). */
+  const MatX& lastTransition() const { return m_piStep; }
 
   /** The mixing weights mu^{j|i} of the last mix(): column i holds the weights of mode i. */
   const MatX& mixingWeights() const { return m_mixW; }
@@ -94,6 +106,7 @@ class CIMMEstimator
 
  private:
   MatX m_pi;
+  MatX m_piStep;  ///< the Markov matrix of the last mix() (pi for one step)
   VecX m_mu, m_muPred;
   MatX m_mixW;
   double m_floor;
