@@ -58,52 +58,70 @@ MatX innovationCovariance(const MatX& P, const CSparseJacobian& H, const VecX& R
   return S;
 }
 
-TUpdateResult ekfLogLikelihood(const MatX& P, const CSparseJacobian& H, const VecX& nu, const VecX& Rdiag, VecX* x)
+namespace
+{
+/** P H^T and the Cholesky factor of S = H P H^T + R (symmetrised), the same arithmetic for the
+ * likelihood and the update. \return false if S is not positive definite. */
+bool innovationFactors(const MatX& P, const CSparseJacobian& H, const VecX& Rdiag, TInnovationFactors& f)
+{
+  f.PHt = H.timesTransposedBy(P);  // n x m
+  MatX S = H.times(f.PHt);
+  S = 0.5 * (S + S.transpose());
+  S.diagonal() += Rdiag;
+  f.llt.compute(S);
+  f.ok = f.llt.info() == Eigen::Success;
+  return f.ok;
+}
+
+double gaussianLogLikelihood(const TInnovationFactors& f, double nis, int dim)
+{
+  return -0.5 * (nis + 2.0 * f.llt.matrixLLT().diagonal().array().log().sum() + dim * std::log(2 * M_PI));
+}
+}  // namespace
+
+TUpdateResult ekfLogLikelihood(const MatX& P, const CSparseJacobian& H, const VecX& nu, const VecX& Rdiag, VecX* x,
+                               TInnovationFactors* keep)
 {
   TUpdateResult res;
   res.dim = static_cast<int>(nu.size());
+  if (keep) keep->ok = false;
   if (nu.size() == 0)
   {
     res.ok = true;
     return res;
   }
-  const MatX PHt = H.timesTransposedBy(P);
-  MatX S = H.times(PHt);
-  S = 0.5 * (S + S.transpose());
-  S.diagonal() += Rdiag;
-  const Eigen::LLT<MatX> llt(S);
-  if (llt.info() != Eigen::Success) return res;
-  res.nis = llt.matrixL().solve(nu).squaredNorm();
-  if (x) x->noalias() += PHt * llt.solve(nu);
-  res.logLikelihood =
-      -0.5 * (res.nis + 2.0 * llt.matrixLLT().diagonal().array().log().sum() + res.dim * std::log(2 * M_PI));
+  TInnovationFactors local;
+  TInnovationFactors& f = keep ? *keep : local;
+  if (!innovationFactors(P, H, Rdiag, f)) return res;
+  res.nis = f.llt.matrixL().solve(nu).squaredNorm();
+  if (x) x->noalias() += f.PHt * f.llt.solve(nu);
+  res.logLikelihood = gaussianLogLikelihood(f, res.nis, res.dim);
   res.ok = true;
   return res;
 }
 
-TUpdateResult ekfUpdate(VecX& x, MatX& P, const CSparseJacobian& H, const VecX& nu, const VecX& Rdiag)
+TUpdateResult ekfUpdate(VecX& x, MatX& P, const CSparseJacobian& H, const VecX& nu, const VecX& Rdiag,
+                        TInnovationFactors* reuse)
 {
   TUpdateResult res;
   res.dim = static_cast<int>(nu.size());
+  const bool have = reuse && reuse->ok;
+  if (reuse) reuse->ok = false;  // consumed: P changes below
   if (nu.size() == 0)
   {
     res.ok = true;
     return res;
   }
-  const MatX PHt = H.timesTransposedBy(P);  // n x m
-  MatX S = H.times(PHt);
-  S = 0.5 * (S + S.transpose());
-  S.diagonal() += Rdiag;
-  const Eigen::LLT<MatX> llt(S);
-  if (llt.info() != Eigen::Success) return res;
+  TInnovationFactors local;
+  TInnovationFactors& f = have ? *reuse : local;
+  if (!have && !innovationFactors(P, H, Rdiag, f)) return res;
   // With S = L L^T: z = L^-1 nu, Z = L^-1 (P H^T)^T; then x += Z^T z, P -= Z^T Z.
-  const auto L = llt.matrixL();
+  const auto L = f.llt.matrixL();
   const VecX z = L.solve(nu);
-  MatX Z = PHt.transpose();
+  MatX Z = f.PHt.transpose();
   L.solveInPlace(Z);
   res.nis = z.squaredNorm();
-  res.logLikelihood =
-      -0.5 * (res.nis + 2.0 * llt.matrixLLT().diagonal().array().log().sum() + res.dim * std::log(2 * M_PI));
+  res.logLikelihood = gaussianLogLikelihood(f, res.nis, res.dim);
   x.noalias() += Z.transpose() * z;
   P.selfadjointView<Eigen::Lower>().rankUpdate(Z.transpose(), -1.0);
   P.triangularView<Eigen::StrictlyUpper>() = P.transpose();

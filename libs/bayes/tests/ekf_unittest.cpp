@@ -97,6 +97,52 @@ TEST(EkfUpdate, LogLikelihoodOnlyMatchesTheUpdateAndLeavesTheStateAlone)
   EXPECT_FALSE(ekfLogLikelihood(MatX::Zero(n, n), H, nu, VecX::Zero(8)).ok);
 }
 
+TEST(EkfUpdate, ReusingTheLikelihoodsFactorsGivesBitwiseTheSameUpdate)
+{
+  std::mt19937 rng(5);
+  const int n = 43;
+  CSparseJacobian H(10, n);
+  for (int k = 0; k < 5; ++k)
+  {
+    H.addBlock(2 * k, 0, randomMat(2, 7, rng));
+    H.addBlock(2 * k, 7 + 6 * k, randomMat(2, 6, rng));
+  }
+  const VecX x0 = randomMat(n, 1, rng);
+  const MatX P0 = randomSpd(n, rng);
+  const VecX nu = randomMat(10, 1, rng);
+  const VecX R = VecX::Constant(10, 0.7);
+
+  VecX xA = x0, xB = x0;
+  MatX PA = P0, PB = P0;
+  const auto plain = ekfUpdate(xA, PA, H, nu, R);
+  TInnovationFactors f;
+  const auto lik = ekfLogLikelihood(PB, H, nu, R, nullptr, &f);
+  ASSERT_TRUE(f.ok);
+  EXPECT_EQ(f.PHt.rows(), n);
+  EXPECT_EQ(f.PHt.cols(), 10);
+  const auto reused = ekfUpdate(xB, PB, H, nu, R, &f);
+  ASSERT_TRUE(plain.ok && lik.ok && reused.ok);
+  EXPECT_FALSE(f.ok);  // consumed: P has changed
+  EXPECT_EQ(xA, xB);
+  EXPECT_EQ(PA, PB);
+  EXPECT_EQ(plain.logLikelihood, reused.logLikelihood);
+  EXPECT_EQ(plain.nis, reused.nis);
+  EXPECT_EQ(lik.logLikelihood, plain.logLikelihood);
+
+  // Consumed factors are not reused: a second update with them recomputes from the new P.
+  VecX xC = xA, xD = xA;
+  MatX PC = PA, PD = PA;
+  ekfUpdate(xC, PC, H, nu, R);
+  ekfUpdate(xD, PD, H, nu, R, &f);
+  EXPECT_EQ(PC, PD);
+  EXPECT_EQ(xC, xD);
+
+  // A failed factorisation is never kept as usable.
+  TInnovationFactors bad;
+  EXPECT_FALSE(ekfLogLikelihood(MatX::Zero(n, n), H, nu, VecX::Zero(10), nullptr, &bad).ok);
+  EXPECT_FALSE(bad.ok);
+}
+
 TEST(EkfUpdate, RejectsNonPositiveInnovationCovariance)
 {
   std::mt19937 rng(3);

@@ -36,6 +36,7 @@ CMonoSlamIMM::CMonoSlamIMM(const TOptions& opts, const TIMMBankOptions& bank, co
   m_wasDormant.assign(r, 0);
   m_lazyPrediction = m_dormantBelow > 0 && bank.lazy_prediction;
   m_lazy.resize(r);
+  m_factors.resize(r);
   m_focal = 0.5 * (m_cam->fx() + m_cam->fy());
   m_sigmaPixel = m_opts.sigma_pixel;
   initialiseState();
@@ -301,12 +302,14 @@ int familyRank(const motion::TMotionModel& m)
 }
 }  // namespace
 
-double CMonoSlamIMM::modeLogLikelihood(int i, const bayes::CSparseJacobian& H, const VecX& nu, const VecX& Rdiag) const
+double CMonoSlamIMM::modeLogLikelihood(int i, const bayes::CSparseJacobian& H, const VecX& nu, const VecX& Rdiag,
+                                       bayes::TInnovationFactors* keep) const
 {
   const TLazyMode& L = m_lazy[i];
+  if (keep) keep->ok = false;
   if (!L.active)
   {
-    const auto res = bayes::ekfLogLikelihood(m_imm->mode(i).P, H, nu, Rdiag);
+    const auto res = bayes::ekfLogLikelihood(m_imm->mode(i).P, H, nu, Rdiag, nullptr, keep);
     return res.ok ? res.logLikelihood : -std::numeric_limits<double>::infinity();
   }
   // S = H A P~ A^T H^T + R without forming A P~ A^T (O(n m)).
@@ -346,7 +349,7 @@ void CMonoSlamIMM::updateBank(const std::vector<TCandidate>& cands, const std::v
       bayes::CSparseJacobian H;
       VecX nu;
       buildMeasurement(m_imm->mode(i), cands, use, H, nu);
-      ll[i] = modeLogLikelihood(i, H, nu, Rdiag);
+      ll[i] = modeLogLikelihood(i, H, nu, Rdiag, &m_factors[i]);
     });
     VecX a(r);
     for (int i = 0; i < r; ++i) a[i] = std::log(std::max(m_imm->predictedProbabilities()[i], 1e-300)) + ll[i];
@@ -377,12 +380,12 @@ void CMonoSlamIMM::updateBank(const std::vector<TCandidate>& cands, const std::v
     m_pool->parallelFor(0, r, [&](int i) {
       logLik[i] += ll[i];
       if (m_dormant[i]) return;  // stays at its prediction
-      materialize(i);            // a lazy mode the frame makes active
+      materialize(i);            // a lazy mode the frame makes active (it kept no factors)
       auto& g = m_imm->mode(i);
       bayes::CSparseJacobian H;
       VecX nu;
       buildMeasurement(g, cands, use, H, nu);
-      bayes::ekfUpdate(g.x, g.P, H, nu, Rdiag);
+      bayes::ekfUpdate(g.x, g.P, H, nu, Rdiag, &m_factors[i]);  // P H^T and chol(S) of the likelihood above
       normalizeQuaternion(g);
     });
   }

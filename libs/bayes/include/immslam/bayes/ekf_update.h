@@ -4,6 +4,8 @@
 
 #include <immslam/math/types.h>
 
+#include <Eigen/Cholesky>
+
 #include <vector>
 
 namespace immslam::bayes
@@ -54,20 +56,34 @@ struct TUpdateResult
   double nis = 0;              ///< \f$ \nu^\top S^{-1} \nu \f$
 };
 
+/** What ekfLogLikelihood() computes and ekfUpdate() needs again: \f$ PH^\top \f$ and the Cholesky
+ * factor of \f$ S = HPH^\top + R \f$. Valid only for the same P, H and R (the caller's contract);
+ * ekfUpdate() consumes it (ok = false afterwards). */
+struct TInnovationFactors
+{
+  MatX PHt;
+  Eigen::LLT<MatX> llt;
+  bool ok = false;
+};
+
 /** Kalman update of (x, P) with innovation nu = z - h(x), sparse Jacobian H and measurement noise R:
  * \f$ S = H P H^\top + R,\; K = P H^\top S^{-1},\; x \mathrel{+}= K\nu,\;
  * P \mathrel{-}= (PH^\top) S^{-1} (PH^\top)^\top \f$, the last as a symmetric rank-m update
  * (only one triangle computed, then mirrored: P stays exactly symmetric).
- * \param Rdiag the diagonal of R (independent pixel noise). */
-TUpdateResult ekfUpdate(VecX& x, MatX& P, const CSparseJacobian& H, const VecX& nu, const VecX& Rdiag);
+ * \param Rdiag the diagonal of R (independent pixel noise).
+ * \param reuse if given and ok: the factors ekfLogLikelihood() kept for this P, H and R (the O(n m k)
+ * product and the O(m^3) factorisation are not repeated; the result is bitwise the same). */
+TUpdateResult ekfUpdate(VecX& x, MatX& P, const CSparseJacobian& H, const VecX& nu, const VecX& Rdiag,
+                        TInnovationFactors* reuse = nullptr);
 
 /** The log-likelihood \f$ \ln \mathcal{N}(\nu; 0, H P H^\top + R) \f$ and NIS of the innovation, without
  * updating (x, P): the same numbers ekfUpdate() reports, at O(n * sum of block sizes + m^3) instead of
  * the update's O(n^2 m). Used for the IMM modes that are not updated in a frame (see
  * CMonoSlamIMM, dormant modes). \param x if given, the mean update only: x += P H^T S^-1 nu (O(n m)).
+ * \param keep if given, receives P H^T and the factor of S for a later ekfUpdate() of the same P, H, R.
  * \return ok = false if S is not positive definite (x left unchanged). */
 TUpdateResult ekfLogLikelihood(const MatX& P, const CSparseJacobian& H, const VecX& nu, const VecX& Rdiag,
-                               VecX* x = nullptr);
+                               VecX* x = nullptr, TInnovationFactors* keep = nullptr);
 
 /** Innovation covariance \f$ H P H^\top + R \f$ only (no update). */
 MatX innovationCovariance(const MatX& P, const CSparseJacobian& H, const VecX& Rdiag);

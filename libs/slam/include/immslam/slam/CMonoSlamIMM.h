@@ -271,8 +271,11 @@ class CMonoSlamIMM
   /** The measurement of mode g for the candidates `use`: innovation nu and sparse Jacobian H. */
   void buildMeasurement(const bayes::TGaussian& g, const std::vector<TCandidate>& cands, const std::vector<int>& use,
                         bayes::CSparseJacobian& H, VecX& nu) const;
-  /** ln N(nu; 0, H P_i H^T + R) of mode i's prediction (lazy modes from their transition blocks). */
-  double modeLogLikelihood(int i, const bayes::CSparseJacobian& H, const VecX& nu, const VecX& Rdiag) const;
+  /** ln N(nu; 0, H P_i H^T + R) of mode i's prediction (lazy modes from their transition blocks).
+   * \param keep if given, receives P_i H^T and the factor of S of a mode with a full covariance, for its
+   * update (not filled for a lazy mode, whose P is not yet its prediction). */
+  double modeLogLikelihood(int i, const bayes::CSparseJacobian& H, const VecX& nu, const VecX& Rdiag,
+                           bayes::TInnovationFactors* keep = nullptr) const;
   /** Dormant modes take the posterior of the most probable updated mode (after updateProbabilities). */
   void settleDormantModes();
   std::vector<int> rescue(const std::vector<TCandidate>& cands, const std::vector<char>& used);
@@ -317,6 +320,8 @@ class CMonoSlamIMM
     std::vector<int> blockAt;  ///< transition block of each state offset, -1 elsewhere
   };
   std::vector<TLazyMode> m_lazy;
+  /** Per mode: P H^T and the factor of S of the frame's first likelihood, reused by its update. */
+  std::vector<bayes::TInnovationFactors> m_factors;
   Vec3 m_rWC = Vec3::Zero();    ///< fused camera pose T_W_C
   Vec4 m_qWC = Vec4(1, 0, 0, 0);
   TFrameReport m_report;
