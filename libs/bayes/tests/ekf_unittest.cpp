@@ -27,6 +27,17 @@ MatX randomMat(int r, int c, std::mt19937& rng)
     for (int j = 0; j < c; ++j) A(i, j) = g(rng);
   return A;
 }
+/** H of k point measurements (2 rows each) on a 7-parameter camera and k 6-parameter features. */
+CSparseJacobian randomCameraFeatureJacobian(int k, int n, std::mt19937& rng)
+{
+  CSparseJacobian H(2 * k, n);
+  for (int f = 0; f < k; ++f)
+  {
+    H.addBlock(2 * f, 0, randomMat(2, 7, rng));
+    H.addBlock(2 * f, 7 + 6 * f, randomMat(2, 6, rng));
+  }
+  return H;
+}
 }  // namespace
 
 TEST(SparseJacobian, MatchesDense)
@@ -50,12 +61,7 @@ TEST(EkfUpdate, MatchesTextbookKalmanUpdate)
 {
   std::mt19937 rng(2);
   const int n = 25;
-  CSparseJacobian H(6, n);
-  for (int k = 0; k < 3; ++k)
-  {
-    H.addBlock(2 * k, 0, randomMat(2, 7, rng));
-    H.addBlock(2 * k, 7 + 6 * k, randomMat(2, 6, rng));
-  }
+  const CSparseJacobian H = randomCameraFeatureJacobian(3, n, rng);
   const MatX Hd = H.toDense();
   VecX x = randomMat(n, 1, rng);
   MatX P = randomSpd(n, rng);
@@ -101,12 +107,7 @@ TEST(EkfUpdate, ReusingTheLikelihoodsFactorsGivesBitwiseTheSameUpdate)
 {
   std::mt19937 rng(5);
   const int n = 43;
-  CSparseJacobian H(10, n);
-  for (int k = 0; k < 5; ++k)
-  {
-    H.addBlock(2 * k, 0, randomMat(2, 7, rng));
-    H.addBlock(2 * k, 7 + 6 * k, randomMat(2, 6, rng));
-  }
+  const CSparseJacobian H = randomCameraFeatureJacobian(5, n, rng);
   const VecX x0 = randomMat(n, 1, rng);
   const MatX P0 = randomSpd(n, rng);
   const VecX nu = randomMat(10, 1, rng);
