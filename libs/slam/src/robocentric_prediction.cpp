@@ -13,34 +13,45 @@ namespace
 constexpr int kU = motion::kV;  // velocities u = (v, w) at 7..12
 
 using TBlockJac = TTransitionBlock;
-/** Rows of one block of M = A P~: M_b = D_b P~_b + G_b P~_u (S = block size). */
-template <int S>
-void rowBlock(const TBlockJac& b, const MatX& P, const Eigen::Ref<const MatX>& Pu, MatX& M)
+using PanelX = Eigen::Matrix<double, Eigen::Dynamic, 7>;  // room for the widest block (the pose)
+
+/** Rows of block a of M = A P~ in the columns of block b: M(a, b) = D_a P~(a, b) + G_a P~(u, b). */
+template <int Sa, int Sb>
+void panelRows(const TBlockJac& a, const MatX& P, const Eigen::Matrix<double, 6, Sb>& Pub, Eigen::Index bOff,
+               PanelX& panel)
 {
-  const Eigen::Matrix<double, S, S> D = b.D.topLeftCorner<S, S>();
-  auto Mb = M.middleRows<S>(b.off);
-  if (b.hasG)
-  {
-    const Eigen::Matrix<double, S, 6> G = b.G.topRows<S>();
-    for (Eigen::Index c = 0; c < P.cols(); ++c)
-      Mb.col(c).noalias() = D * P.col(c).segment<S>(b.off) + G * Pu.col(c);
-  }
-  else
-    for (Eigen::Index c = 0; c < P.cols(); ++c) Mb.col(c).noalias() = D * P.col(c).segment<S>(b.off);
+  const Eigen::Matrix<double, Sa, Sa> D = a.D.topLeftCorner<Sa, Sa>();
+  auto out = panel.block<Sa, Sb>(a.off - bOff, 0);
+  out.noalias() = D * P.block<Sa, Sb>(a.off, bOff);
+  if (a.hasG) out.noalias() += a.G.topRows<Sa>() * Pub;
 }
 
-/** Columns of one block of P' = M A^T, rows from the block down (lower triangle). */
-template <int S>
-void colBlock(const TBlockJac& b, const MatX& M, MatX& P)
+/** Column block b of P' = M A^T, rows from the block down (lower triangle):
+ *  P'(b.., b) = M(b.., b) D_b^T + M(b.., u) G_b^T. M(b.., b) needs P~ only in block b's own columns
+ *  (rows from b down, and the rows of u), so the column blocks are independent once M(:, u) is known. */
+template <int Sb>
+void columnBlock(const TBlockJac& b, const std::vector<TBlockJac>& blocks, const Eigen::Ref<const MatX>& Mu, MatX& P,
+                 PanelX& panel)
 {
-  const Eigen::Index n = M.rows(), h = n - b.off;
-  const Eigen::Matrix<double, S, S> Dt = b.D.topLeftCorner<S, S>().transpose();
-  auto Pc = P.block(b.off, b.off, h, S);
-  Pc.noalias() = M.block(b.off, b.off, h, S).lazyProduct(Dt);
+  const Eigen::Index h = P.rows() - b.off;
+  const Eigen::Matrix<double, 6, Sb> Pub = P.block<6, Sb>(kU, b.off);
+  for (const auto& a : blocks)
+  {
+    if (a.off < b.off) continue;
+    switch (a.len)
+    {
+      case 3: panelRows<3, Sb>(a, P, Pub, b.off, panel); break;
+      case 6: panelRows<6, Sb>(a, P, Pub, b.off, panel); break;
+      default: panelRows<7, Sb>(a, P, Pub, b.off, panel); break;
+    }
+  }
+  const Eigen::Matrix<double, Sb, Sb> Dt = b.D.topLeftCorner<Sb, Sb>().transpose();
+  auto Pc = P.block(b.off, b.off, h, Sb);
+  Pc.noalias() = panel.topLeftCorner(h, Sb).lazyProduct(Dt);
   if (b.hasG)
   {
-    const Eigen::Matrix<double, 6, S> Gt = b.G.topRows<S>().transpose();
-    Pc.noalias() += M.block(b.off, kU, h, 6).lazyProduct(Gt);
+    const Eigen::Matrix<double, 6, Sb> Gt = b.G.topRows<Sb>().transpose();
+    Pc.noalias() += Mu.bottomRows(h).lazyProduct(Gt);
   }
 }
 }  // namespace
@@ -169,26 +180,29 @@ void predictRobocentricMean(bayes::TGaussian& g, const std::vector<TFeature>& fe
 void applyRobocentricTransition(MatX& P, const std::vector<TTransitionBlock>& blocks, MatX& scratch)
 {
   const Eigen::Index n = P.rows();
-  // M = A P~ (row blocks), then P' = M A^T, lower triangle only (column blocks), then mirrored.
-  // Fixed-size kernels per block size: tiny dynamic products would go through GEMM packing.
-  scratch.resize(n, n);
-  const auto Pu = P.middleRows<6>(kU);
-  for (const auto& b : blocks)
+  // P' = A P~ A^T with M = A P~ formed only where P' needs it: on and below the block diagonal
+  // (one column block at a time, in a panel) and in the columns of u (first, before P~ is
+  // overwritten). Every access runs down columns; fixed-size kernels per pair of block sizes
+  // (tiny dynamic products would go through GEMM packing). Then the upper triangle is mirrored.
+  scratch.resize(n, 6);
   {
-    switch (b.len)
+    const Mat6 Puu = P.block<6, 6>(kU, kU);
+    for (const auto& a : blocks)
     {
-      case 3: rowBlock<3>(b, P, Pu, scratch); break;
-      case 6: rowBlock<6>(b, P, Pu, scratch); break;
-      default: rowBlock<7>(b, P, Pu, scratch); break;
+      auto Mu = scratch.middleRows(a.off, a.len);
+      Mu.noalias() = a.D.topLeftCorner(a.len, a.len).lazyProduct(P.block(a.off, kU, a.len, 6));
+      if (a.hasG) Mu.noalias() += a.G.topRows(a.len).lazyProduct(Puu);
     }
   }
+  thread_local PanelX panel;
+  panel.resize(n, 7);
   for (const auto& b : blocks)
   {
     switch (b.len)
     {
-      case 3: colBlock<3>(b, scratch, P); break;
-      case 6: colBlock<6>(b, scratch, P); break;
-      default: colBlock<7>(b, scratch, P); break;
+      case 3: columnBlock<3>(b, blocks, scratch, P, panel); break;
+      case 6: columnBlock<6>(b, blocks, scratch, P, panel); break;
+      default: columnBlock<7>(b, blocks, scratch, P, panel); break;
     }
   }
   P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
