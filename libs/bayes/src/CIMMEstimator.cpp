@@ -123,7 +123,14 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
         m_mixXbar.col(i).noalias() += m_mixW(j, i) * m_modes[j].x;
         m_mixYbar.col(i).noalias() += m_mixW(j, i) * m_mixY.col(j);
       }
-  for (int i = 0; i < r; ++i) m_scratch[i].resize(n, n);
+  // In place when every output's own terms come from its own input only (A diagonal: pi = a I + b 1 1^T,
+  // the default bank): column col of P^i is read (for u and for output i) before it is overwritten, and
+  // the upper triangle, rewritten by the mirror, is never read. Otherwise into m_scratch, then swapped.
+  bool inplace = true;
+  for (int i = 0; i < r && inplace; ++i)
+    for (int j = 0; j < r && inplace; ++j) inplace = j == i || !(m_mixA(j, i) > 0);
+  if (!inplace)
+    for (int i = 0; i < r; ++i) m_scratch[i].resize(n, n);
 
   // Covariances, by chunks of 16 columns: column c of every output, rows [c, n) (lower triangle,
   // every access sequential), then the chunk's rows of the upper triangle copied from its own lower
@@ -148,10 +155,10 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
       }
       for (int i = 0; i < r; ++i)
       {
-        auto o = m_scratch[i].col(col).tail(h);
+        auto o = (inplace ? m_modes[i].P : m_scratch[i]).col(col).tail(h);
         if (!(m_muPred[i] > 0))
         {
-          o = m_modes[i].P.col(col).tail(h);
+          if (!inplace) o = m_modes[i].P.col(col).tail(h);
           continue;
         }
         // o = B_i u + sum_{j: A_ji > 0} A_ji (P^j(:, col) + y_j y_j(col)) - ybar_i ybar_i(col),
@@ -189,7 +196,8 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
     // that, so its cache lines are requested a few columns ahead (mix ~10 % faster measured at n = 613).
     for (int i = 0; i < r; ++i)
     {
-      double* S = m_scratch[i].data();
+      if (inplace && !(m_muPred[i] > 0)) continue;  // untouched
+      double* S = (inplace ? m_modes[i].P : m_scratch[i]).data();
       for (Eigen::Index k = c0 + 1; k < n; ++k)
       {
 #if defined(__GNUC__) || defined(__clang__)
@@ -210,7 +218,7 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
   for (int i = 0; i < r; ++i)
   {
     m_modes[i].x = m_mixXbar.col(i);
-    std::swap(m_modes[i].P, m_scratch[i]);
+    if (!inplace) std::swap(m_modes[i].P, m_scratch[i]);
   }
 }
 
