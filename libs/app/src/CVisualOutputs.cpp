@@ -75,9 +75,13 @@ void CVisualOutputs::onFrame(std::size_t frameIndex, const cv::Mat& image, const
   if (fr.shadow)
     for (const auto& t : fr.shadow->tracks)
       if (t.measured) m_tracks[t.id].push_back(t.p_W);
-  m_times.push_back(r.timestamp);
-  m_areas.push_back(r.meanSearchAreaPx2);
-  m_probs.push_back(slam.modelProbabilities());
+  if (m_opts.plots)
+  {
+    m_times.push_back(r.timestamp);
+    m_areas.push_back(r.meanSearchAreaPx2);
+    const VecX mu = slam.modelProbabilities();
+    m_probs.insert(m_probs.end(), mu.data(), mu.data() + mu.size());
+  }
   const double gate = math::chi2Quantile(slam.options().search_probability, 2);
   const bool liveOn = m_live && m_live->isOpen();
   if (liveOn || (m_overlays && frameIndex % static_cast<std::size_t>(m_opts.overlay_every_n) == 0))
@@ -161,8 +165,9 @@ void CVisualOutputs::finish(const slam::CMonoSlamIMM& slam, const eval::TTraject
   if (!m_opts.plots || m_times.empty()) return;
   try
   {
-    MatX P(static_cast<Eigen::Index>(m_probs.size()), static_cast<Eigen::Index>(m_modelNames.size()));
-    for (std::size_t k = 0; k < m_probs.size(); ++k) P.row(static_cast<Eigen::Index>(k)) = m_probs[k].transpose();
+    const auto r = static_cast<Eigen::Index>(m_modelNames.size());
+    const MatX P = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+        m_probs.data(), static_cast<Eigen::Index>(m_times.size()), r);
     viz::TModelProbabilityPlotOptions po;
     if (labels.size() == m_times.size()) po.truthLabels = labels;
     viz::plotModelProbabilities(m_times, m_modelNames, P, (fs::path(m_dir) / "model_probabilities.png").string(), po);

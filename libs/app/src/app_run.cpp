@@ -295,10 +295,13 @@ int CImmMonoSlamApp::runImpl()
     out.addFrame(*fr, sys->slam());
     visuals.onFrame(m_summary.framesProcessed, frame.colour.empty() ? frame.grey : frame.colour, *fr, sys->slam(),
                     out.trajectory());
-    if (synthetic)
-      labels.push_back(sim::toString(synthetic->label(frame.index)));
-    else if (const auto it = folderLabels.find(std::llround(frame.timestamp * 1e6)); it != folderLabels.end())
-      labels.push_back(it->second);
+    if (outOpts.plots)  // the true labels are only drawn in the probability plot
+    {
+      if (synthetic)
+        labels.push_back(sim::toString(synthetic->label(frame.index)));
+      else if (const auto it = folderLabels.find(std::llround(frame.timestamp * 1e6)); it != folderLabels.end())
+        labels.push_back(it->second);
+    }
     ++m_summary.framesProcessed;
     frameMs.push_back(fr->totalMs);
     matched.push_back(fr->slam->nMatched);

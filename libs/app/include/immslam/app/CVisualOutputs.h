@@ -46,8 +46,10 @@ class CVisualOutputs
   TOutputOptions m_opts;
   std::unique_ptr<viz::COverlayWriter> m_overlays;
   std::unique_ptr<CLiveView> m_live;
+  // Series of the end-of-run plots, kept only when plots are on (a few bytes per frame: a long live run
+  // without plots keeps no per-frame series here).
   std::vector<double> m_times, m_areas;
-  std::vector<VecX> m_probs;
+  std::vector<double> m_probs;  ///< model probabilities, one row of r per frame (row-major)
   std::vector<std::string> m_modelNames;
   std::map<std::int64_t, std::vector<Vec3>> m_tracks;  ///< dynamic tracks (world positions) by id
 };
