@@ -13,12 +13,10 @@ namespace
 constexpr int kU = motion::kV;  // velocities u = (v, w) at 7..12
 
 using TBlockJac = TTransitionBlock;
-using PanelX = Eigen::Matrix<double, Eigen::Dynamic, 7>;  // room for the widest block (the pose)
-
 /** Rows of block a of M = A P~ in the columns of block b: M(a, b) = D_a P~(a, b) + G_a P~(u, b). */
 template <int Sa, int Sb>
 void panelRows(const TBlockJac& a, const MatX& P, const Eigen::Matrix<double, 6, Sb>& Pub, Eigen::Index bOff,
-               PanelX& panel)
+               Eigen::Ref<MatX> panel)
 {
   const Eigen::Matrix<double, Sa, Sa> D = a.D.topLeftCorner<Sa, Sa>();
   auto out = panel.block<Sa, Sb>(a.off - bOff, 0);
@@ -31,7 +29,7 @@ void panelRows(const TBlockJac& a, const MatX& P, const Eigen::Matrix<double, 6,
  *  (rows from b down, and the rows of u), so the column blocks are independent once M(:, u) is known. */
 template <int Sb>
 void columnBlock(const TBlockJac& b, const std::vector<TBlockJac>& blocks, const Eigen::Ref<const MatX>& Mu, MatX& P,
-                 PanelX& panel)
+                 Eigen::Ref<MatX> panel)
 {
   const Eigen::Index h = P.rows() - b.off;
   const Eigen::Matrix<double, 6, Sb> Pub = P.block<6, Sb>(kU, b.off);
@@ -184,25 +182,25 @@ void applyRobocentricTransition(MatX& P, const std::vector<TTransitionBlock>& bl
   // (one column block at a time, in a panel) and in the columns of u (first, before P~ is
   // overwritten). Every access runs down columns; fixed-size kernels per pair of block sizes
   // (tiny dynamic products would go through GEMM packing). Then the upper triangle is mirrored.
-  scratch.resize(n, 6);
+  scratch.resize(n, 13);  // M(:, u), then the panel of one column block (the widest: the pose, 7)
+  const auto Mu = scratch.leftCols<6>();
   {
     const Mat6 Puu = P.block<6, 6>(kU, kU);
     for (const auto& a : blocks)
     {
-      auto Mu = scratch.middleRows(a.off, a.len);
-      Mu.noalias() = a.D.topLeftCorner(a.len, a.len).lazyProduct(P.block(a.off, kU, a.len, 6));
-      if (a.hasG) Mu.noalias() += a.G.topRows(a.len).lazyProduct(Puu);
+      auto Ma = scratch.block(a.off, 0, a.len, 6);
+      Ma.noalias() = a.D.topLeftCorner(a.len, a.len).lazyProduct(P.block(a.off, kU, a.len, 6));
+      if (a.hasG) Ma.noalias() += a.G.topRows(a.len).lazyProduct(Puu);
     }
   }
-  thread_local PanelX panel;
-  panel.resize(n, 7);
+  const auto panel = scratch.rightCols<7>();
   for (const auto& b : blocks)
   {
     switch (b.len)
     {
-      case 3: columnBlock<3>(b, blocks, scratch, P, panel); break;
-      case 6: columnBlock<6>(b, blocks, scratch, P, panel); break;
-      default: columnBlock<7>(b, blocks, scratch, P, panel); break;
+      case 3: columnBlock<3>(b, blocks, Mu, P, panel); break;
+      case 6: columnBlock<6>(b, blocks, Mu, P, panel); break;
+      default: columnBlock<7>(b, blocks, Mu, P, panel); break;
     }
   }
   P.triangularView<Eigen::StrictlyUpper>() = P.transpose();

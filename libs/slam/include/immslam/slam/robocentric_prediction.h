@@ -35,7 +35,8 @@ struct TTransitionBlock
  * P~ = P + E N E^T (in place). predictRobocentric() = this + applyRobocentricTransition(). */
 void predictRobocentricMean(bayes::TGaussian& g, const std::vector<TFeature>& features,
                             const motion::TMotionIncrement& inc, std::vector<TTransitionBlock>& blocks);
-/** P <- A P~ A^T (exactly symmetric), O(n sum_b (s_b^2 + 6 s_b)). */
+/** P <- A P~ A^T (exactly symmetric), about half of O(n sum_b (s_b^2 + 6 s_b)): only the lower block
+ * triangle is computed. \p scratch: an n x 13 work buffer. */
 void applyRobocentricTransition(MatX& P, const std::vector<TTransitionBlock>& blocks, MatX& scratch);
 /** Columns of block b of A P~ A^T (n x len_b), without forming it: O(n len_b (len_b + 6)). */
 MatX transitionColumns(const MatX& Pt, const std::vector<TTransitionBlock>& blocks, int b);
