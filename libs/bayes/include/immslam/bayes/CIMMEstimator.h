@@ -68,7 +68,9 @@ class CIMMEstimator
    * output is the common term plus its own mode. Rounding: the subtraction of ybar ybar^T costs
    * O(eps max_j |y_j|^2) absolutely, i.e. relative to the spread of the modes' means, not to |x|.
    * Cost O(r n^2) + O(nnz(Delta) n^2) flops (the direct sum is O(r^2 n^2)); memory: the lower
-   * triangles of the r inputs read once, the r outputs written once.
+   * triangles of the r inputs read once, the r outputs written once: over their own inputs when Delta
+   * is diagonal (the default pi: column col of P^i is read for S + T and for output i before it is
+   * overwritten, the upper triangle is only written), else into separate buffers swapped in after.
    * Column chunk by column chunk: lower triangle of each column (sequential accesses), then the
    * chunk's rows of the upper triangle copied from it, so every output is exactly symmetric.
    * \param pool optional worker pool (chunks in parallel; bitwise the same result for any pool).
@@ -111,7 +113,7 @@ class CIMMEstimator
   MatX m_mixW;
   double m_floor;
   std::vector<TGaussian> m_modes;
-  std::vector<MatX> m_scratch;  ///< output buffers of mix(), swapped with the modes' P
+  std::vector<MatX> m_scratch;  ///< output buffers of mix() when Delta is not diagonal, swapped with the modes' P
   // Buffers of mix() (kept between calls: no allocation while the dimension stays the same).
   VecX m_mixXm;    ///< xm = sum_j mu^j x^j, the point the mixing is expanded around
   MatX m_mixY;     ///< n x r: y_j = x^j - xm
