@@ -271,6 +271,11 @@ TEST(RobustConditions, BlackFramesForTwoSecondsThenNormal)
     expectContinuous(run, kFrames, 50);
     EXPECT_LE(f.matchedDuring, 2);      // nothing to match in black frames
     EXPECT_GE(f.matchedAfter, 5);       // tracking resumes on the normal frames
+    // The map is kept through the blackout and found again ([slam] relocalise): the trajectory goes on
+    // in the frame and scale of before (held ATE 0.03 / 0.009 measured; 3.5 / 0.19 without).
+    EXPECT_LT(f.ateAfterHeld, 0.1);
+    EXPECT_GE(f.recoveryFrames, 0);
+    EXPECT_LE(f.recoveryFrames, 2);
   }
 }
 
@@ -319,8 +324,11 @@ TEST(RobustConditions, HundredDroppedFrames)
     SCOPED_TRACE(cfg);
     const TRun run = runSystem(cfg, handheld(), [](std::size_t k, cv::Mat&, const cv::Mat&) { return k < g0 || k >= g1; });
     ASSERT_FALSE(HasFailure());
-    figures("100 dropped frames, " + cfg, run, g0, g1);
+    const auto f = figures("100 dropped frames, " + cfg, run, g0, g1);
     EXPECT_EQ(run.est.size(), kFrames - 100);
+    // The frame after the gap is relocalised on the map (held ATE 0.024 / 0.015 measured; 11.6 / 3.5
+    // when the motion models' extrapolation over the gap was searched).
+    EXPECT_LT(f.ateAfterHeld, 0.1);
   }
 }
 
@@ -342,8 +350,11 @@ TEST(RobustConditions, VeryFastRotation)
     SCOPED_TRACE(cfg);
     const TRun run = runSystem(cfg, seq, {});
     ASSERT_FALSE(HasFailure());
-    figures("fast rotation, " + cfg, run, 60, 120);
+    const auto f = figures("fast rotation, " + cfg, run, 60, 120);
     EXPECT_EQ(run.est.size(), seq.frames.size());
+    // Lost in the fast motion after the rotation, found again by relocalisation (held ATE 0.12 / 0.08
+    // measured; 2.4 / 4.2 when the map was deleted and rebuilt at another scale).
+    EXPECT_LT(f.ateAfterHeld, 0.3);
   }
 }
 

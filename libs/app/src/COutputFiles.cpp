@@ -28,7 +28,8 @@ COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& sla
                                "n_rescued", "n_hypotheses", "n_added", "n_deleted", "n_converted", "slam_ms",
                                "predict_ms", "search_ms", "ransac_ms", "update_ms", "map_ms", "dominant_model",
                                "expanded_search", "sigma_pixel", "shadow_ms", "n_promoted", "n_handed_over",
-                               "n_new_shadow", "n_shadow_pending", "n_dynamic", "n_released", "n_dormant_modes", "n_lazy_modes"});
+                               "n_new_shadow", "n_shadow_pending", "n_dynamic", "n_released", "n_dormant_modes", "n_lazy_modes", "lost_frames",
+                               "relocalised", "reloc_inliers", "reloc_ms"});
   if (shadow)
   {
     m_classes = std::make_unique<io::CCsvWriter>(path("classifications.csv"),
@@ -72,7 +73,8 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
                      fr.totalMs, r.frame, r.dtFrames, r.nFound, r.nLowInnovation, r.nRescued, r.nHypotheses, r.nAdded,
                      r.nDeleted, r.nConverted, r.timeMs, r.tPredictMs, r.tSearchMs, r.tRansacMs, r.tUpdateMs, r.tMapMs,
                      slam.models()[best].name, r.expandedSearch ? 1 : 0, r.sigmaPixel, fr.shadowMs, fr.promoted,
-                     fr.handedOver, fr.newShadow, nPending, nDynamic, fr.released, r.nDormantModes, r.nLazyModes});
+                     fr.handedOver, fr.newShadow, nPending, nDynamic, fr.released, r.nDormantModes, r.nLazyModes, r.lostFrames,
+                     r.relocalised ? 1 : 0, r.nRelocInliers, r.tRelocMs});
   if (fr.shadow && m_classes)
   {
     for (const auto& d : fr.shadow->decisions)

@@ -6,6 +6,8 @@
 #include <immslam/math/parallel.h>
 #include <immslam/slam/CMonoSlamIMM.h>
 #include <immslam/slam/measurement.h>
+#include <immslam/slam/relocalise.h>
+#include <immslam/slam/robocentric_prediction.h>
 #include <immslam/slam/state_ops.h>
 
 #include <algorithm>
@@ -118,6 +120,17 @@ const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& 
     predict(m_report.dtFrames);
     m_report.tPredictMs = msSince(t);
 
+    m_report.lostFrames = m_lostFrames;
+    // Lost in the previous frame, or a gap in the frames over which the motion models' prediction
+    // cannot be trusted: look for the map in the whole image first.
+    if (relocalising() || (m_opts.relocalise && m_opts.relocalise_after_gap > 0 &&
+                           m_report.dtFrames > m_opts.relocalise_after_gap))
+    {
+      t = Clock::now();
+      m_report.relocalised = tryRelocalise(grey);
+      m_report.tRelocMs = msSince(t);
+    }
+
     t = Clock::now();
     std::vector<TCandidate> cands;
     searchFeatures(grey, cands);
@@ -182,11 +195,67 @@ const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& 
       inliers.insert(inliers.end(), high.begin(), high.end());
       estimateMeasurementNoise(cands, inliers);
     }
+    updateLostState();
     manageMap();
     m_report.tMapMs = msSince(t);
   }
   endFrame(t0);
   return m_report;
+}
+
+bool CMonoSlamIMM::tryRelocalise(const cv::Mat& grey)
+{
+  std::vector<TRelocPoint> pts;
+  for (const auto& f : m_features)
+    if (f.patch.valid() && depthKnown(f)) pts.push_back(TRelocPoint{f.id, featurePosition(f), &f.patch});
+  TRelocaliseParams p;
+  p.fastThreshold = m_opts.fast_threshold;
+  p.minNcc = m_opts.min_ncc;
+  p.minInliers = m_opts.relocalise_min_inliers;
+  p.reprojectionPx = std::max(2.0, 3.0 * m_sigmaPixel);
+  const TRelocalisation res = relocalise(grey, *m_cam, pts, p);
+  m_report.nRelocInliers = static_cast<int>(res.inlierIds.size());
+  if (!res.ok) return false;
+  // The found pose's uncertainty, generously: 3 sigma of a pixel in rotation, and in translation the
+  // same angle at 3x the inliers' median depth (the depth of a PnP pose from a shallow map is its
+  // weakest direction). The next update, with these same features, refines it.
+  const double sTheta = 3.0 * m_sigmaPixel / m_focal;
+  const double sT = 3.0 * sTheta * res.medianDepth;
+  Mat6 V = Mat6::Zero();
+  const double sv = m_opts.init_linear_velocity_std_px / m_focal, sw = m_opts.init_angular_velocity_std_px / m_focal;
+  V.topLeftCorner<3, 3>() = Mat3::Identity() * sv * sv;
+  V.bottomRightCorner<3, 3>() = Mat3::Identity() * sw * sw;
+  const int r = m_imm->numModels();
+  m_pool->parallelFor(0, r, [&](int i) {
+    materialize(i);
+    applyPoseCorrection(m_imm->mode(i), m_features, res.r_CW, res.q_CW, sT, sTheta, V, m_scratch[i]);
+  });
+  if (r == 1)
+    m_xPred = m_imm->mode(0).x;
+  else
+    m_imm->combine(m_imm->predictedProbabilities(), m_xPred, nullptr);
+  return true;
+}
+
+void CMonoSlamIMM::updateLostState()
+{
+  if (!m_opts.relocalise) return;
+  int known = 0;
+  for (const auto& f : m_features) known += depthKnown(f) ? 1 : 0;
+  const bool lost = m_report.nMatched < 3 && known >= m_opts.relocalise_min_inliers;
+  m_lostFrames = lost ? m_lostFrames + 1 : 0;
+  if (!lost || m_lostFrames > m_opts.relocalise_max_frames) return;
+  // A frame-level failure (blackout, blur, a motion no model predicted) says nothing about the
+  // features themselves: their failed searches do not count towards the deletion rule.
+  std::unordered_map<std::int64_t, int> index;
+  for (int k = 0; k < static_cast<int>(m_features.size()); ++k) index[m_features[k].id] = k;
+  for (const auto& rec : m_report.searches)
+  {
+    if (rec.status == TSearchRecord::EStatus::LowInnovationInlier || rec.status == TSearchRecord::EStatus::RescuedInlier)
+      continue;
+    const auto it = index.find(rec.id);
+    if (it != index.end() && m_features[it->second].nPredicted > 0) m_features[it->second].nPredicted--;
+  }
 }
 
 void CMonoSlamIMM::refreshFused()

@@ -107,6 +107,33 @@ void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& featur
   applyRobocentricTransition(g.P, blocks, scratch);
 }
 
+void applyPoseCorrection(bayes::TGaussian& g, const std::vector<TFeature>& features, const Vec3& r_CW_new,
+                         const Vec4& q_CW_new, double sigmaT, double sigmaTheta, const Mat6& velocityCov, MatX& scratch)
+{
+  const Vec3 r = g.x.segment<3>(0);
+  const Vec4 q = g.x.segment<4>(3);
+  motion::TMotionIncrement inc;
+  // r' = R(dq)^T (r - t) and q' = conj(dq) (x) q (the prediction's world-pose step) give the new pose.
+  inc.dq = math::quatMultiply(q, math::quatConjugate(q_CW_new));
+  inc.dq.normalize();
+  inc.t = r - math::quatRotate(inc.dq, r_CW_new);
+  // Pose error of C' entered through the velocity slots: t + e_t and dq (x) exp(e_theta).
+  inc.J_t_u.leftCols<3>().setIdentity();
+  Mat4 J_right;
+  math::quatMultiply(inc.dq, Vec4(1, 0, 0, 0), nullptr, &J_right);
+  inc.J_dq_u.rightCols<3>() = 0.5 * J_right.rightCols<3>();  // d(dq (x) exp(e))/de at e = 0
+  inc.noiseCov.topLeftCorner<3, 3>() = Mat3::Identity() * sigmaT * sigmaT;
+  inc.noiseCov.bottomRightCorner<3, 3>() = Mat3::Identity() * sigmaTheta * sigmaTheta;
+  // uNext = 0, J_uNext_u = 0: the velocities are reset below. Clear them first so that the slots
+  // carry only the pose error.
+  g.x.segment<6>(kU).setZero();
+  g.P.middleRows<6>(kU).setZero();
+  g.P.middleCols<6>(kU).setZero();
+  predictRobocentric(g, features, inc, scratch);
+  g.x.segment<4>(3).normalize();
+  g.P.block<6, 6>(kU, kU) = velocityCov;
+}
+
 void predictRobocentricMean(bayes::TGaussian& g, const std::vector<TFeature>& features,
                             const motion::TMotionIncrement& inc, std::vector<TTransitionBlock>& blocks)
 {

@@ -7,8 +7,11 @@
 #include <immslam/math/quaternion.h>
 #include <immslam/slam/CMonoSlamIMM.h>
 #include <immslam/slam/measurement.h>
+#include <immslam/slam/relocalise.h>
 #include <immslam/slam/robocentric_prediction.h>
 #include <immslam/slam/state_ops.h>
+
+#include <opencv2/imgproc.hpp>
 
 #include <random>
 
@@ -468,4 +471,139 @@ TEST(IMMSlam, DroppedFramesGiveTheModesTheTimeToSwitch)
       EXPECT_LE((slam.bank().lastTransition() - pi * pi * pi).cwiseAbs().maxCoeff(), 1e-15);
     }
   }
+}
+
+// ---- Relocalisation (relocalise.h, applyPoseCorrection) ----
+
+TEST(Relocalisation, PoseCorrectionKeepsTheWorldAndMatchesNumericalJacobians)
+{
+  const TToyState s = movingToyState();
+  std::mt19937 rng(21);
+  const int n = static_cast<int>(s.x.size());
+  const MatX P0 = randomCovariance(n, rng);
+  const Vec3 rNew = s.x.segment<3>(0) + Vec3(0.1, -0.05, 0.2);
+  const Vec4 qNew = math::quatMultiply(math::quatFromRotationVector(Vec3(0.05, 0.1, -0.02)), s.x.segment<4>(3));
+  const double sT = 0.03, sTh = 0.01;
+  Mat6 V = Mat6::Identity() * 4e-4;
+  // The correction is a rigid motion of the camera by the increment T_CC' of the estimate (held
+  // fixed: the state's uncertainty relative to the camera is carried over, as by a prediction step)
+  // plus the pose error e = (e_t, e_theta) of C': t + e_t and dq (x) exp(e_theta); velocities cleared.
+  Vec4 dq0 = math::quatMultiply(s.x.segment<4>(3), math::quatConjugate(qNew));
+  dq0.normalize();
+  const Vec3 t0 = s.x.segment<3>(0) - math::quatRotate(dq0, rNew);
+  const auto g = [&](const VecX& x, const Vec6& e) -> VecX {
+    motion::TMotionIncrement inc;
+    inc.t = t0 + e.head<3>();
+    inc.dq = math::quatMultiply(dq0, math::quatFromRotationVector(e.tail<3>()));
+    bayes::TGaussian G{x, MatX::Zero(n, n)};
+    G.x.segment<6>(7).setZero();
+    MatX scratch;
+    predictRobocentric(G, s.feats, inc, scratch);
+    return G.x;
+  };
+  bayes::TGaussian G{s.x, P0};
+  MatX scratch;
+  applyPoseCorrection(G, s.feats, rNew, qNew, sT, sTh, V, scratch);
+  // The mean: the camera is at the new pose, the world did not move.
+  EXPECT_LT((G.x.segment<3>(0) - rNew).norm(), 1e-12);
+  EXPECT_LT(std::min((G.x.segment<4>(3) - qNew).norm(), (G.x.segment<4>(3) + qNew).norm()), 1e-12);
+  const auto toWorld = [](const VecX& x, const Vec3& pC) {
+    return Vec3(math::quatToRotation(x.segment<4>(3)).transpose() * (pC - x.segment<3>(0)));
+  };
+  EXPECT_LT((toWorld(G.x, G.x.segment<3>(19)) - toWorld(s.x, s.x.segment<3>(19))).norm(), 1e-12);
+  const auto idWorld = [&](const VecX& x) {
+    const VecX y = x.segment<6>(13);
+    return toWorld(x, features::inverseDepthToPoint(y));
+  };
+  EXPECT_LT((idWorld(G.x) - idWorld(s.x)).norm(), 1e-12);
+  EXPECT_TRUE(G.x.segment<6>(7).isZero());
+  // The covariance: J_x P0 J_x^T + J_e N J_e^T outside the velocities, V on them.
+  const MatX Jx = math::numericalJacobian([&](const VecX& x) { return g(x, Vec6::Zero()); }, s.x, 1e-7);
+  const MatX Je = math::numericalJacobian([&](const VecX& e) { return g(s.x, Vec6(e)); }, VecX(Vec6::Zero()), 1e-7);
+  Mat6 N = Mat6::Zero();
+  N.topLeftCorner<3, 3>() = Mat3::Identity() * sT * sT;
+  N.bottomRightCorner<3, 3>() = Mat3::Identity() * sTh * sTh;
+  MatX expected = Jx * P0 * Jx.transpose() + Je * N * Je.transpose();
+  expected.middleRows<6>(7).setZero();
+  expected.middleCols<6>(7).setZero();
+  expected.block<6, 6>(7, 7) = V;
+  EXPECT_LT((G.P - expected).norm(), 1e-6 * P0.norm()) << "difference\n" << (G.P - expected);
+  EXPECT_LT((G.P - G.P.transpose()).norm(), 1e-15);
+}
+
+namespace
+{
+/** A random texture of blobs and boxes (corners everywhere), 800 x 800, smoothed a little. */
+cv::Mat randomTexture(std::uint64_t seed)
+{
+  cv::RNG rng(seed);
+  cv::Mat t(800, 800, CV_8UC1, cv::Scalar(128));
+  for (int k = 0; k < 600; ++k)
+  {
+    const cv::Point a(rng.uniform(0, 800), rng.uniform(0, 800));
+    const cv::Point b = a + cv::Point(rng.uniform(6, 40), rng.uniform(6, 40));
+    const int grey = rng.uniform(0, 256);
+    if (k % 3 == 0)
+      cv::circle(t, a, rng.uniform(3, 15), cv::Scalar(grey), cv::FILLED);
+    else
+      cv::rectangle(t, a, b, cv::Scalar(grey), cv::FILLED);
+  }
+  cv::GaussianBlur(t, t, cv::Size(0, 0), 0.8);
+  return t;
+}
+
+/** The texture on the plane z = 3 of W (1 texel = 0.01 units, centred on the z axis) seen by a
+ * pinhole camera at T_C_W = (R, t): the image is a homography of the texture. */
+cv::Mat viewPlane(const cv::Mat& tex, const Mat3& K, const Mat3& R, const Vec3& t)
+{
+  Mat3 A;
+  A << 0.01, 0, -4, 0, 0.01, -4, 0, 0, 3;  // p_W = A (u_tex, v_tex, 1)
+  Mat3 H = K * (R * A + t * Vec3(0, 0, 1).transpose());
+  cv::Mat Hc(3, 3, CV_64F);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) Hc.at<double>(i, j) = H(i, j);
+  cv::Mat img;
+  cv::warpPerspective(tex, img, Hc, cv::Size(320, 240), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(128));
+  return img;
+}
+}  // namespace
+
+TEST(Relocalisation, FindsThePoseOfATexturedPlaneAndNothingElsewhere)
+{
+  const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
+  Mat3 K;
+  K << 200, 0, 160, 0, 200, 120, 0, 0, 1;
+  const cv::Mat tex = randomTexture(5);
+  // The map: corners of a first view (camera at the origin), on the plane, with their patches.
+  const cv::Mat img0 = viewPlane(tex, K, Mat3::Identity(), Vec3::Zero());
+  frontend::TDetectorParams dp;
+  const auto corners = frontend::detectInEmptyCells(img0, {}, 48, dp);
+  ASSERT_GE(corners.size(), 30u);
+  std::vector<frontend::CFeaturePatch> patches(corners.size());
+  std::vector<TRelocPoint> pts;
+  for (std::size_t k = 0; k < corners.size(); ++k)
+  {
+    ASSERT_TRUE(patches[k].extract(img0, corners[k].uv, 5));
+    const Vec3 b = cam->unproject(corners[k].uv).unitVector();
+    pts.push_back(TRelocPoint{static_cast<std::int64_t>(k), Vec3(b * (3.0 / b.z())), &patches[k]});
+  }
+  // A second view: turned by 4 degrees (mostly a pan) and moved by 0.35 units.
+  const Vec4 q1 = math::quatFromRotationVector(Vec3(0.01, 0.07, 0.015));
+  const Vec3 t1(0.25, -0.1, 0.2);
+  const cv::Mat img1 = viewPlane(tex, K, math::quatToRotation(q1), t1);
+  TRelocaliseParams p;
+  const TRelocalisation res = relocalise(img1, *cam, pts, p);
+  ASSERT_TRUE(res.ok) << res.nCorrespondences << " correspondences, " << res.inlierIds.size() << " inliers";
+  EXPECT_GE(static_cast<int>(res.inlierIds.size()), 20);
+  EXPECT_LT((res.r_CW - t1).norm(), 0.02);
+  EXPECT_LT(math::quatToRotationVector(math::quatMultiply(math::quatConjugate(q1), res.q_CW)).norm(), 0.005);
+  EXPECT_GT(res.medianDepth, 3.0);  // distances to points of the plane z = 3 in view
+  EXPECT_LT(res.medianDepth, 4.0);
+  // A view of another texture: no relocalisation (never a pose from chance matches).
+  const cv::Mat other = viewPlane(randomTexture(6), K, math::quatToRotation(q1), t1);
+  const TRelocalisation none = relocalise(other, *cam, pts, p);
+  EXPECT_FALSE(none.ok) << none.inlierIds.size() << " inliers";
+  // Too few map points: nothing is tried.
+  std::vector<TRelocPoint> few(pts.begin(), pts.begin() + 5);
+  EXPECT_FALSE(relocalise(img1, *cam, few, p).ok);
 }

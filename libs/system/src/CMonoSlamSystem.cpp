@@ -141,7 +141,11 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
     // Map management: new features where the image is empty of SLAM and shadow features.
     const auto& so = m_slam->options();
     const int visible = rep.nPredicted + pendingVisible;
-    const int want = std::clamp(so.min_visible_features - visible, 0, so.max_new_features_per_frame);
+    // While the SLAM is lost and keeps its map to find it again, new features would be placed with a
+    // pose it knows to be wrong: none are added until it relocalises or gives the map up.
+    const int want = m_slam->relocalising()
+                         ? 0
+                         : std::clamp(so.min_visible_features - visible, 0, so.max_new_features_per_frame);
     if (want > 0)
     {
       std::vector<Vec2> uv;

@@ -102,6 +102,10 @@ struct TFrameReport
   double tPredictMs = 0, tSearchMs = 0, tRansacMs = 0, tUpdateMs = 0, tMapMs = 0;
   int nDormantModes = 0;     ///< IMM modes not updated this frame (TIMMBankOptions::dormant_below)
   int nLazyModes = 0;        ///< of them, modes whose covariance was not predicted either (lazy_prediction)
+  int lostFrames = 0;        ///< lost frames in a row before this one (TOptions::relocalise)
+  bool relocalised = false;  ///< this frame's pose was found by relocalisation
+  int nRelocInliers = 0;     ///< PnP inliers of the relocalisation attempt (0: none tried or failed early)
+  double tRelocMs = 0;       ///< time of the relocalisation attempt (ms)
   std::vector<TSearchRecord> searches;
 };
 
@@ -184,6 +188,18 @@ class CMonoSlamIMM
     double delete_min_match_ratio = 0.5;        ///< ...delete if matched/predicted is below this
     bool convert_to_xyz = true;
     double linearity_threshold = 0.1;           ///< ID -> XYZ when the linearity index is below (ref. [3])
+    /** Relocalisation (relocalise.h). A frame with fewer than 3 measurements used while the map holds at
+     * least relocalise_min_inliers features of known depth is a lost frame. While lost (up to
+     * relocalise_max_frames frames in a row) the failed searches do not count towards the deletion
+     * rule, the caller holds new features (relocalising()), and each frame the map's templates are
+     * looked for in the whole image: a PnP pose with at least relocalise_min_inliers inliers replaces
+     * the prediction (applyPoseCorrection) before the active search. The same is tried at a frame
+     * that comes more than relocalise_after_gap frame periods after the last (dropped frames: the
+     * motion models' extrapolation over the gap is no prediction to search with). */
+    bool relocalise = true;
+    int relocalise_min_inliers = 8;
+    int relocalise_max_frames = 60;
+    double relocalise_after_gap = 10;
     int num_threads = 2;                        ///< worker threads for the bank (1: none)
     int seed = 1;                               ///< RANSAC random seed (determinism)
 
@@ -260,6 +276,12 @@ class CMonoSlamIMM
   Vec3 featurePosition(const TFeature& f) const;
   /** The feature's fused estimate in W (position, covariances, inverse-depth view). */
   TFeatureWorldEstimate featureWorldEstimate(const TFeature& f) const;
+  /** Tracking is lost and the map is kept for relocalisation (TOptions::relocalise): callers should not
+   * add new features now. */
+  bool relocalising() const
+  {
+    return m_opts.relocalise && m_lostFrames > 0 && m_lostFrames <= m_opts.relocalise_max_frames;
+  }
   /** Removes features by id from every mode (e.g. caught moving). */
   void removeFeatures(const std::vector<std::int64_t>& ids);
 
@@ -294,6 +316,10 @@ class CMonoSlamIMM
   void materialize(int i);
   void updateWorldPose();
   double frameDt(double timestamp);
+  /** Looks for the map in the whole image and, if found, re-expresses every mode in the found pose. */
+  bool tryRelocalise(const cv::Mat& grey);
+  /** Lost-frame bookkeeping at the end of a frame (before the map management). */
+  void updateLostState();
 
   TOptions m_opts;
   COnePointRansac m_ransac;
@@ -331,5 +357,6 @@ class CMonoSlamIMM
   std::vector<double> m_firstDeltas;
   double m_focal = 1;
   double m_sigmaPixel = 1;  ///< current measurement noise std (px)
+  int m_lostFrames = 0;     ///< lost frames in a row (TOptions::relocalise)
 };
 }  // namespace immslam::slam

@@ -19,6 +19,16 @@ namespace immslam::slam
 void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& features,
                         const motion::TMotionIncrement& inc, MatX& scratch);
 
+/** Relocalisation (relocalise.h): the camera is found at T_C'W = (r_CW_new, q_CW_new) instead of the
+ * state's T_CW. The whole camera-centred state is re-expressed in C' as by a prediction step whose
+ * increment is T_CC' (dq = q_CW (x) conj(q_CW_new), t = r_CW - R(dq) r_CW_new): the world positions
+ * of the features do not change, their camera-frame coordinates and covariances follow. The found
+ * pose's own uncertainty enters like the impulses of a motion model, a translation error of std
+ * sigmaT and a rotation error of std sigmaTheta (rad) of C'. The velocities, unknown after a loss of
+ * tracking, restart at zero with the covariance velocityCov (cross-covariances zero).
+ * \param scratch an n x n buffer reused between calls. */
+void applyPoseCorrection(bayes::TGaussian& g, const std::vector<TFeature>& features, const Vec3& r_CW_new,
+                         const Vec4& q_CW_new, double sigmaT, double sigmaTheta, const Mat6& velocityCov, MatX& scratch);
 /** One block row of the transition A: rows [off, off + len) of A hold D (len x len) on the block's own
  * columns and, if hasG, G (len x 6) on the velocity columns u; zeros elsewhere (len <= 7). */
 struct TTransitionBlock

@@ -1,0 +1,180 @@
+/* imm-monoslam — relocalisation: map templates matched at the image's corners, RANSAC PnP. */
+#include <immslam/math/quaternion.h>
+#include <immslam/slam/relocalise.h>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/features2d.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace immslam::slam
+{
+namespace
+{
+/** Zero-mean, unit-norm copy of a template (empty if it is flat). */
+std::vector<float> normalizedTemplate(const cv::Mat& t32)
+{
+  std::vector<float> out(t32.begin<float>(), t32.end<float>());
+  double mean = 0;
+  for (float v : out) mean += v;
+  mean /= static_cast<double>(out.size());
+  double ss = 0;
+  for (float& v : out)
+  {
+    v = static_cast<float>(v - mean);
+    ss += static_cast<double>(v) * v;
+  }
+  if (!(ss > 1e-6 * out.size())) return {};
+  const float s = static_cast<float>(1.0 / std::sqrt(ss));
+  for (float& v : out) v *= s;
+  return out;
+}
+
+/** Zero-mean, unit-norm image window of the template's size centred at (u, v) (empty if flat). */
+std::vector<float> normalizedWindow(const cv::Mat& grey, int u, int v, int half)
+{
+  const int side = 2 * half + 1;
+  std::vector<float> out(static_cast<std::size_t>(side * side));
+  double mean = 0;
+  for (int y = 0; y < side; ++y)
+  {
+    const std::uint8_t* row = grey.ptr<std::uint8_t>(v - half + y) + (u - half);
+    for (int x = 0; x < side; ++x) mean += out[y * side + x] = row[x];
+  }
+  mean /= static_cast<double>(out.size());
+  double ss = 0;
+  for (float& a : out)
+  {
+    a = static_cast<float>(a - mean);
+    ss += static_cast<double>(a) * a;
+  }
+  if (!(ss > 1e-6 * out.size())) return {};
+  const float s = static_cast<float>(1.0 / std::sqrt(ss));
+  for (float& a : out) a *= s;
+  return out;
+}
+}  // namespace
+
+TRelocalisation relocalise(const cv::Mat& grey, const camera::CCameraModel& cam, const std::vector<TRelocPoint>& points,
+                           const TRelocaliseParams& p)
+{
+  if (grey.empty() || grey.type() != CV_8UC1) throw std::runtime_error("relocalise: needs a non-empty 8-bit grey image");
+  TRelocalisation out;
+  if (points.empty() || static_cast<int>(points.size()) < std::max(p.minInliers, 4)) return out;
+  const int half = points.front().patch ? points.front().patch->halfSize() : 5;
+
+  // Corners of the whole image, strongest first, where a template fits.
+  std::vector<cv::KeyPoint> kps;
+  cv::FAST(grey, kps, p.fastThreshold, true);
+  kps.erase(std::remove_if(kps.begin(), kps.end(),
+                           [&](const cv::KeyPoint& k) {
+                             const int u = cvRound(k.pt.x), v = cvRound(k.pt.y);
+                             return u < half + 1 || v < half + 1 || u >= grey.cols - half - 1 || v >= grey.rows - half - 1;
+                           }),
+            kps.end());
+  std::stable_sort(kps.begin(), kps.end(), [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });
+  if (static_cast<int>(kps.size()) > p.maxCorners) kps.resize(static_cast<std::size_t>(p.maxCorners));
+  out.nCorners = static_cast<int>(kps.size());
+  std::vector<std::vector<float>> windows(kps.size());
+  for (std::size_t c = 0; c < kps.size(); ++c)
+    windows[c] = normalizedWindow(grey, cvRound(kps[c].pt.x), cvRound(kps[c].pt.y), half);
+
+  // Each point's best corner by ZNCC, refined to sub-pixel by the active search's own routine.
+  std::vector<cv::Point3d> obj;
+  std::vector<cv::Point2d> img;
+  std::vector<int> which;
+  std::vector<Vec2> matchedUv;
+  frontend::TSearchParams sp;
+  sp.minScore = p.minNcc;
+  const Mat2 S = Mat2::Identity() * 0.75;  // gate radius ~2.1 px around the corner
+  for (int k = 0; k < static_cast<int>(points.size()); ++k)
+  {
+    const TRelocPoint& pt = points[k];
+    if (!pt.patch || !pt.patch->valid() || pt.patch->halfSize() != half) continue;
+    const cv::Mat t32 = pt.patch->originalTemplate();
+    const std::vector<float> T = normalizedTemplate(t32);
+    if (T.empty()) continue;
+    double best = -1, second = -1;
+    int bestC = -1;
+    for (std::size_t c = 0; c < kps.size(); ++c)
+    {
+      const auto& W = windows[c];
+      if (W.empty()) continue;
+      float s = 0;
+      for (std::size_t i = 0; i < T.size(); ++i) s += T[i] * W[i];
+      if (s > best)
+      {
+        // The previous best becomes the second unless it is the same spot.
+        if (bestC >= 0 && cv::norm(kps[c].pt - kps[static_cast<std::size_t>(bestC)].pt) > 3.0) second = std::max(second, best);
+        best = s;
+        bestC = static_cast<int>(c);
+      }
+      else if (bestC >= 0 && s > second && cv::norm(kps[c].pt - kps[static_cast<std::size_t>(bestC)].pt) > 3.0)
+        second = s;
+    }
+    if (bestC < 0 || best < p.minNcc || best - second < p.ambiguityMargin) continue;
+    const Vec2 h(kps[static_cast<std::size_t>(bestC)].pt.x, kps[static_cast<std::size_t>(bestC)].pt.y);
+    const auto res = frontend::searchInEllipse(grey, t32, h, S, sp);
+    if (!res.found) continue;
+    const Vec3 b = cam.unproject(res.uv).unitVector();
+    if (!(b.z() > 1e-3)) continue;
+    obj.emplace_back(pt.p_W.x(), pt.p_W.y(), pt.p_W.z());
+    img.emplace_back(b.x() / b.z(), b.y() / b.z());
+    which.push_back(k);
+    matchedUv.push_back(res.uv);
+  }
+  out.nCorrespondences = static_cast<int>(obj.size());
+  if (out.nCorrespondences < std::max(p.minInliers, 4)) return out;
+
+  const double focal = 0.5 * (cam.fx() + cam.fy());
+  cv::Mat rvec, tvec;
+  std::vector<int> inl;
+  const cv::Mat K = cv::Mat::eye(3, 3, CV_64F);
+  bool solved = false;
+  try
+  {
+    solved = cv::solvePnPRansac(obj, img, K, cv::noArray(), rvec, tvec, false, p.ransacIterations,
+                                static_cast<float>(p.reprojectionPx / focal), 0.999, inl, cv::SOLVEPNP_EPNP);
+  }
+  catch (const cv::Exception&)
+  {
+    solved = false;  // degenerate configuration (e.g. all points on a line): no relocalisation
+  }
+  if (!solved || static_cast<int>(inl.size()) < p.minInliers) return out;
+  // Refine on the inliers (Levenberg-Marquardt from the RANSAC pose) and recount them.
+  std::vector<cv::Point3d> o2;
+  std::vector<cv::Point2d> i2;
+  for (int i : inl)
+  {
+    o2.push_back(obj[static_cast<std::size_t>(i)]);
+    i2.push_back(img[static_cast<std::size_t>(i)]);
+  }
+  cv::solvePnP(o2, i2, K, cv::noArray(), rvec, tvec, true, cv::SOLVEPNP_ITERATIVE);
+  const Vec3 w(rvec.at<double>(0), rvec.at<double>(1), rvec.at<double>(2));
+  const Vec3 t(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
+  if (!w.allFinite() || !t.allFinite()) return out;
+  const Vec4 q = math::quatFromRotationVector(w);
+  const Mat3 R = math::quatToRotation(q);
+  const double gate = p.reprojectionPx / focal;
+  std::vector<double> depths;
+  for (std::size_t a = 0; a < obj.size(); ++a)
+  {
+    const Vec3 pc = R * Vec3(obj[a].x, obj[a].y, obj[a].z) + t;
+    if (!(pc.z() > 0)) continue;
+    const double ex = pc.x() / pc.z() - img[a].x, ey = pc.y() / pc.z() - img[a].y;
+    if (std::hypot(ex, ey) > gate) continue;
+    out.inlierIds.push_back(points[static_cast<std::size_t>(which[a])].id);
+    out.inlierUv.push_back(matchedUv[a]);
+    depths.push_back(pc.norm());
+  }
+  if (static_cast<int>(out.inlierIds.size()) < p.minInliers) return out;
+  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+  out.medianDepth = depths[depths.size() / 2];
+  out.r_CW = t;
+  out.q_CW = q;
+  out.ok = true;
+  return out;
+}
+}  // namespace immslam::slam
