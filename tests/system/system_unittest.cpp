@@ -1,7 +1,13 @@
 /* End-to-end accuracy and behaviour of the application on rendered and real sequences. */
 #include "test_helpers.h"
 
+#include <immslam/eval/TTrajectory.h>
+#include <immslam/eval/ate.h>
 #include <immslam/eval/statistics.h>
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
 
 #include <cmath>
 #include <filesystem>
@@ -131,4 +137,67 @@ TEST(SystemBadInput, MissingAndCorruptFramesAreSkippedAndCounted)
   ASSERT_EQ(s.skipReasons.size(), 2u);
   EXPECT_NE(s.skipReasons[0].find("color_image_0007"), std::string::npos) << s.skipReasons[0];
   EXPECT_NE(s.skipReasons[1].find("color_image_0012"), std::string::npos) << s.skipReasons[1];
+}
+
+TEST(SystemRealData, MonoslamTestseqBlackoutIsRelocalisedOnTheSameMap)
+{
+  // Real images, a covered lens for 2 s (frames 400-459 black): the full system keeps its map, finds it
+  // again in the first normal frame ([slam] relocalise) and goes on in the same frame and scale. The
+  // trajectory after the blackout is compared with the undamaged run's (same start, SE(3) alignment,
+  // no rescaling): measured 1.2 % of its extent (69 % when the map was rebuilt).
+  if (!haveSharedData("monoslam_testseq")) GTEST_SKIP() << "../shared/data/monoslam_testseq is absent";
+  const std::string data = sharedData("monoslam_testseq");
+  const std::string folder = outDir("testseq_blackout_input");
+  std::filesystem::create_directories(folder);
+  std::filesystem::copy_file(data + "/calib.txt", folder + "/calib.txt",
+                             std::filesystem::copy_options::overwrite_existing);
+  {
+    std::ofstream black(folder + "/black.pgm", std::ios::binary);
+    black << "P5\n320 240\n255\n" << std::string(320 * 240, '\0');
+  }
+  std::ifstream in(data + "/rgb.txt");
+  std::ofstream out(folder + "/rgb.txt");
+  std::string line;
+  int k = 0;
+  double tAfter = 0;
+  while (std::getline(in, line))
+  {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ss(line);
+    std::string ts, path;
+    ss >> ts >> path;
+    if (k == 460) tAfter = std::stod(ts);
+    out << ts << ' ' << ((k >= 400 && k < 460) ? std::string("black.pgm") : data + "/" + path) << '\n';
+    ++k;
+  }
+  out.close();
+  ASSERT_EQ(k, 1000);
+  const auto run = [&](const std::string& input, const std::string& name) {
+    const auto dir = outDir(name);
+    EXPECT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", input, "--out", dir, "--set", "output.plots=false"}), 0);
+    return dir;
+  };
+  const auto ref = run(data, "testseq_blackout_ref");
+  const auto dmg = run(folder, "testseq_blackout");
+  const auto rows = readCsv(dmg + "/frame_stats.csv");
+  ASSERT_EQ(rows.size(), 1001u);
+  const auto col = [&](const std::string& name) {
+    const auto it = std::find(rows[0].begin(), rows[0].end(), name);
+    return static_cast<std::size_t>(it - rows[0].begin());
+  };
+  EXPECT_EQ(std::stoi(rows[1 + 460][col("relocalised")]), 1);
+  EXPECT_GE(std::stoi(rows[1 + 460][col("reloc_inliers")]), 8);
+  EXPECT_EQ(std::stoi(rows[1 + 459][col("lost_frames")]), 59);
+  const auto after = [&](const eval::TTrajectory& t) {
+    eval::TTrajectory o;
+    for (const auto& p : t)
+      if (p.timestamp >= tAfter - 1e-6) o.push_back(p);
+    return o;
+  };
+  const auto a = eval::computeAte(after(eval::readTumTrajectory(dmg + "/trajectory.txt")),
+                                  after(eval::readTumTrajectory(ref + "/trajectory.txt")), eval::EAlignment::SE3);
+  std::printf("testseq blackout 400-459, imm7-shadow: after the blackout vs the undamaged run (SE3) %.4f = %.2f %% of "
+              "extent\n",
+              a.rmse, 100 * a.rmseOverExtent);
+  EXPECT_LT(a.rmseOverExtent, 0.05);
 }

@@ -116,6 +116,7 @@ const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& 
   else
   {
     m_report.dtFrames = frameDt(timestamp);
+    m_sinceTracked += m_report.dtFrames;
     auto t = Clock::now();
     predict(m_report.dtFrames);
     m_report.tPredictMs = msSince(t);
@@ -205,15 +206,30 @@ const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& 
 
 bool CMonoSlamIMM::tryRelocalise(const cv::Mat& grey)
 {
+  // Templates as first seen and as they looked from the last tracked pose (the camera is often found
+  // near it, but not after a long or fast excursion).
   std::vector<TRelocPoint> pts;
   for (const auto& f : m_features)
-    if (f.patch.valid() && depthKnown(f)) pts.push_back(TRelocPoint{f.id, featurePosition(f), &f.patch});
+  {
+    if (!f.patch.valid() || !depthKnown(f)) continue;
+    const Vec3 p_W = featurePosition(f);
+    Mat2 A = Mat2::Identity();
+    if (m_opts.warp_patches)
+    {
+      Vec3 n = f.r0 - p_W;
+      if (n.norm() > 0) n.normalize();
+      A = frontend::patchWarp(*m_cam, f.r0, f.q0, m_lastTrackedR, m_lastTrackedQ, p_W, n);
+    }
+    pts.push_back(TRelocPoint{f.id, p_W, {f.patch.originalTemplate(), f.patch.predictTemplate(A)}});
+  }
   TRelocaliseParams p;
-  p.fastThreshold = m_opts.fast_threshold;
+  // Corners a little weaker than new features need: a feature seen from elsewhere loses contrast.
+  p.fastThreshold = std::max(5, m_opts.fast_threshold / 2);
   p.minNcc = m_opts.min_ncc;
   p.minInliers = m_opts.relocalise_min_inliers;
   p.reprojectionPx = std::max(2.0, 3.0 * m_sigmaPixel);
   const TRelocalisation res = relocalise(grey, *m_cam, pts, p);
+  m_report.nRelocMatches = res.nCorrespondences;
   m_report.nRelocInliers = static_cast<int>(res.inlierIds.size());
   if (!res.ok) return false;
   // The found pose's uncertainty, generously: 3 sigma of a pixel in rotation, and in translation the
@@ -221,14 +237,27 @@ bool CMonoSlamIMM::tryRelocalise(const cv::Mat& grey)
   // weakest direction). The next update, with these same features, refines it.
   const double sTheta = 3.0 * m_sigmaPixel / m_focal;
   const double sT = 3.0 * sTheta * res.medianDepth;
+  // Velocities: unknown after a long loss (zero, initial priors). Lost for a frame or two in a fast
+  // motion, the camera keeps moving as it did: the displacement from the last tracked pose, per frame,
+  // with its own size as a further 30 % std (else the next frame, predicted at rest, is lost again).
   Mat6 V = Mat6::Zero();
   const double sv = m_opts.init_linear_velocity_std_px / m_focal, sw = m_opts.init_angular_velocity_std_px / m_focal;
-  V.topLeftCorner<3, 3>() = Mat3::Identity() * sv * sv;
-  V.bottomRightCorner<3, 3>() = Mat3::Identity() * sw * sw;
+  Vec6 vel = Vec6::Zero();
+  const double elapsed = m_sinceTracked;  // frame periods since the last tracked frame
+  if (elapsed > 0 && elapsed <= 3)
+  {
+    const Vec4 qCW = res.q_CW;
+    const Vec4 qWC = math::quatConjugate(qCW);
+    const Vec3 rWC = -math::quatRotate(qWC, res.r_CW);
+    vel.head<3>() = math::quatRotate(qCW, Vec3(rWC - m_lastTrackedR)) / elapsed;
+    vel.tail<3>() = math::quatToRotationVector(math::quatMultiply(math::quatConjugate(m_lastTrackedQ), qWC)) / elapsed;
+  }
+  V.topLeftCorner<3, 3>() = Mat3::Identity() * (sv * sv + 0.09 * vel.head<3>().squaredNorm());
+  V.bottomRightCorner<3, 3>() = Mat3::Identity() * (sw * sw + 0.09 * vel.tail<3>().squaredNorm());
   const int r = m_imm->numModels();
   m_pool->parallelFor(0, r, [&](int i) {
     materialize(i);
-    applyPoseCorrection(m_imm->mode(i), m_features, res.r_CW, res.q_CW, sT, sTheta, V, m_scratch[i]);
+    applyPoseCorrection(m_imm->mode(i), m_features, res.r_CW, res.q_CW, sT, sTheta, vel, V, m_scratch[i]);
   });
   if (r == 1)
     m_xPred = m_imm->mode(0).x;
@@ -244,6 +273,12 @@ void CMonoSlamIMM::updateLostState()
   for (const auto& f : m_features) known += depthKnown(f) ? 1 : 0;
   const bool lost = m_report.nMatched < 3 && known >= m_opts.relocalise_min_inliers;
   m_lostFrames = lost ? m_lostFrames + 1 : 0;
+  if (!lost)
+  {
+    m_sinceTracked = 0;
+    m_lastTrackedR = m_rWC;
+    m_lastTrackedQ = m_qWC;
+  }
   if (!lost || m_lostFrames > m_opts.relocalise_max_frames) return;
   // A frame-level failure (blackout, blur, a motion no model predicted) says nothing about the
   // features themselves: their failed searches do not count towards the deletion rule.

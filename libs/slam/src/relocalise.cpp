@@ -63,7 +63,8 @@ TRelocalisation relocalise(const cv::Mat& grey, const camera::CCameraModel& cam,
   if (grey.empty() || grey.type() != CV_8UC1) throw std::runtime_error("relocalise: needs a non-empty 8-bit grey image");
   TRelocalisation out;
   if (points.empty() || static_cast<int>(points.size()) < std::max(p.minInliers, 4)) return out;
-  const int half = points.front().patch ? points.front().patch->halfSize() : 5;
+  const int half = points.front().templates.empty() ? 0 : points.front().templates.front().cols / 2;
+  if (half < 1) return out;
 
   // Corners of the whole image, strongest first, where a template fits.
   std::vector<cv::KeyPoint> kps;
@@ -92,29 +93,48 @@ TRelocalisation relocalise(const cv::Mat& grey, const camera::CCameraModel& cam,
   for (int k = 0; k < static_cast<int>(points.size()); ++k)
   {
     const TRelocPoint& pt = points[k];
-    if (!pt.patch || !pt.patch->valid() || pt.patch->halfSize() != half) continue;
-    const cv::Mat t32 = pt.patch->originalTemplate();
-    const std::vector<float> T = normalizedTemplate(t32);
-    if (T.empty()) continue;
+    std::vector<std::vector<float>> Ts;
+    std::vector<const cv::Mat*> T32;
+    for (const cv::Mat& t : pt.templates)
+    {
+      if (t.type() != CV_32FC1 || t.cols != 2 * half + 1 || t.rows != 2 * half + 1) continue;
+      auto T = normalizedTemplate(t);
+      if (T.empty()) continue;
+      Ts.push_back(std::move(T));
+      T32.push_back(&t);
+    }
+    if (Ts.empty()) continue;
     double best = -1, second = -1;
-    int bestC = -1;
+    int bestC = -1, bestT = 0;
     for (std::size_t c = 0; c < kps.size(); ++c)
     {
       const auto& W = windows[c];
       if (W.empty()) continue;
-      float s = 0;
-      for (std::size_t i = 0; i < T.size(); ++i) s += T[i] * W[i];
+      float s = -1;
+      int tOf = 0;
+      for (std::size_t j = 0; j < Ts.size(); ++j)
+      {
+        float sj = 0;
+        for (std::size_t i = 0; i < W.size(); ++i) sj += Ts[j][i] * W[i];
+        if (sj > s)
+        {
+          s = sj;
+          tOf = static_cast<int>(j);
+        }
+      }
       if (s > best)
       {
         // The previous best becomes the second unless it is the same spot.
         if (bestC >= 0 && cv::norm(kps[c].pt - kps[static_cast<std::size_t>(bestC)].pt) > 3.0) second = std::max(second, best);
         best = s;
         bestC = static_cast<int>(c);
+        bestT = tOf;
       }
       else if (bestC >= 0 && s > second && cv::norm(kps[c].pt - kps[static_cast<std::size_t>(bestC)].pt) > 3.0)
         second = s;
     }
     if (bestC < 0 || best < p.minNcc || best - second < p.ambiguityMargin) continue;
+    const cv::Mat& t32 = *T32[static_cast<std::size_t>(bestT)];
     const Vec2 h(kps[static_cast<std::size_t>(bestC)].pt.x, kps[static_cast<std::size_t>(bestC)].pt.y);
     const auto res = frontend::searchInEllipse(grey, t32, h, S, sp);
     if (!res.found) continue;

@@ -108,7 +108,8 @@ void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& featur
 }
 
 void applyPoseCorrection(bayes::TGaussian& g, const std::vector<TFeature>& features, const Vec3& r_CW_new,
-                         const Vec4& q_CW_new, double sigmaT, double sigmaTheta, const Mat6& velocityCov, MatX& scratch)
+                         const Vec4& q_CW_new, double sigmaT, double sigmaTheta, const Vec6& velocity,
+                         const Mat6& velocityCov, MatX& scratch)
 {
   const Vec3 r = g.x.segment<3>(0);
   const Vec4 q = g.x.segment<4>(3);
@@ -131,6 +132,7 @@ void applyPoseCorrection(bayes::TGaussian& g, const std::vector<TFeature>& featu
   g.P.middleCols<6>(kU).setZero();
   predictRobocentric(g, features, inc, scratch);
   g.x.segment<4>(3).normalize();
+  g.x.segment<6>(kU) = velocity;
   g.P.block<6, 6>(kU, kU) = velocityCov;
 }
 

@@ -88,6 +88,9 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
       const auto& srep = m_shadow->processFrame(cameraMotion(timestamp, rep.dtFrames), grey);
       m_frame.shadow = &srep;
       std::vector<shadow::TPromotion> promotions = srep.promotions;
+      // A SLAM that is lost would place them with a pose it knows to be wrong: dropped.
+      const bool lost = m_slam->relocalising();
+      if (lost) promotions.clear();
       // Without parallax nothing can be classified. While the IMM says the camera is not translating
       // (stationary and rotation families dominate), the SLAM takes the unresolved features it needs,
       // as the IMM paper's filter does with inverse depth; with translation, only when starving.
@@ -97,7 +100,7 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
       for (int i = 0; i < mu.size(); ++i)
         if (m_slam->models()[i].family == motion::EMotionFamily::General) pGeneral += mu[i];
       const int need = pGeneral < 0.5 ? m_slam->options().min_visible_features : m_opts.starved_below;
-      if (m_opts.starved_below > 0 && inView < need)
+      if (!lost && m_opts.starved_below > 0 && inView < need)
       {
         const auto rel = m_shadow->releaseUnresolved(need - inView, m_opts.release_min_measured);
         m_frame.released = static_cast<int>(rel.size());

@@ -104,6 +104,7 @@ struct TFrameReport
   int nLazyModes = 0;        ///< of them, modes whose covariance was not predicted either (lazy_prediction)
   int lostFrames = 0;        ///< lost frames in a row before this one (TOptions::relocalise)
   bool relocalised = false;  ///< this frame's pose was found by relocalisation
+  int nRelocMatches = 0;     ///< map points matched (unambiguously) by the relocalisation attempt
   int nRelocInliers = 0;     ///< PnP inliers of the relocalisation attempt (0: none tried or failed early)
   double tRelocMs = 0;       ///< time of the relocalisation attempt (ms)
   std::vector<TSearchRecord> searches;
@@ -198,7 +199,7 @@ class CMonoSlamIMM
      * motion models' extrapolation over the gap is no prediction to search with). */
     bool relocalise = true;
     int relocalise_min_inliers = 8;
-    int relocalise_max_frames = 60;
+    int relocalise_max_frames = 90;
     double relocalise_after_gap = 10;
     int num_threads = 2;                        ///< worker threads for the bank (1: none)
     int seed = 1;                               ///< RANSAC random seed (determinism)
@@ -358,5 +359,8 @@ class CMonoSlamIMM
   double m_focal = 1;
   double m_sigmaPixel = 1;  ///< current measurement noise std (px)
   int m_lostFrames = 0;     ///< lost frames in a row (TOptions::relocalise)
+  Vec3 m_lastTrackedR = Vec3::Zero();    ///< fused T_W_C at the end of the last frame not lost
+  Vec4 m_lastTrackedQ = Vec4(1, 0, 0, 0);
+  double m_sinceTracked = 0;  ///< frame periods since the end of the last frame not lost
 };
 }  // namespace immslam::slam

@@ -28,7 +28,10 @@ struct TRelocPoint
 {
   std::int64_t id = -1;
   Vec3 p_W = Vec3::Zero();
-  const frontend::CFeaturePatch* patch = nullptr;  ///< must outlive the call
+  /** Its appearance: one or more templates (CV_32F, odd and square, the same size for every point),
+   * e.g. the stored patch as first seen and as it should look from where the camera was last tracked
+   * (CFeaturePatch::predictTemplate). A corner's score is the best over them. */
+  std::vector<cv::Mat> templates;
 };
 
 struct TRelocaliseParams

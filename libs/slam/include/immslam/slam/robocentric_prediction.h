@@ -25,10 +25,12 @@ void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& featur
  * of the features do not change, their camera-frame coordinates and covariances follow. The found
  * pose's own uncertainty enters like the impulses of a motion model, a translation error of std
  * sigmaT and a rotation error of std sigmaTheta (rad) of C'. The velocities, unknown after a loss of
- * tracking, restart at zero with the covariance velocityCov (cross-covariances zero).
+ * tracking, restart at `velocity` (v, w in C', per frame) with the covariance velocityCov
+ * (cross-covariances zero).
  * \param scratch an n x n buffer reused between calls. */
 void applyPoseCorrection(bayes::TGaussian& g, const std::vector<TFeature>& features, const Vec3& r_CW_new,
-                         const Vec4& q_CW_new, double sigmaT, double sigmaTheta, const Mat6& velocityCov, MatX& scratch);
+                         const Vec4& q_CW_new, double sigmaT, double sigmaTheta, const Vec6& velocity,
+                         const Mat6& velocityCov, MatX& scratch);
 /** One block row of the transition A: rows [off, off + len) of A hold D (len x len) on the block's own
  * columns and, if hasG, G (len x 6) on the velocity columns u; zeros elsewhere (len <= 7). */
 struct TTransitionBlock
