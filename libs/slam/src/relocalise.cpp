@@ -13,22 +13,32 @@ namespace immslam::slam
 {
 namespace
 {
+/** Makes v zero-mean and of unit norm in place; empties it if it is flat (no ZNCC defined). */
+void normalizeZeroMean(std::vector<float>& v)
+{
+  double mean = 0;
+  for (float a : v) mean += a;
+  mean /= static_cast<double>(v.size());
+  double ss = 0;
+  for (float& a : v)
+  {
+    a = static_cast<float>(a - mean);
+    ss += static_cast<double>(a) * a;
+  }
+  if (!(ss > 1e-6 * v.size()))
+  {
+    v.clear();
+    return;
+  }
+  const float s = static_cast<float>(1.0 / std::sqrt(ss));
+  for (float& a : v) a *= s;
+}
+
 /** Zero-mean, unit-norm copy of a template (empty if it is flat). */
 std::vector<float> normalizedTemplate(const cv::Mat& t32)
 {
   std::vector<float> out(t32.begin<float>(), t32.end<float>());
-  double mean = 0;
-  for (float v : out) mean += v;
-  mean /= static_cast<double>(out.size());
-  double ss = 0;
-  for (float& v : out)
-  {
-    v = static_cast<float>(v - mean);
-    ss += static_cast<double>(v) * v;
-  }
-  if (!(ss > 1e-6 * out.size())) return {};
-  const float s = static_cast<float>(1.0 / std::sqrt(ss));
-  for (float& v : out) v *= s;
+  normalizeZeroMean(out);
   return out;
 }
 
@@ -37,22 +47,12 @@ std::vector<float> normalizedWindow(const cv::Mat& grey, int u, int v, int half)
 {
   const int side = 2 * half + 1;
   std::vector<float> out(static_cast<std::size_t>(side * side));
-  double mean = 0;
   for (int y = 0; y < side; ++y)
   {
     const std::uint8_t* row = grey.ptr<std::uint8_t>(v - half + y) + (u - half);
-    for (int x = 0; x < side; ++x) mean += out[y * side + x] = row[x];
+    for (int x = 0; x < side; ++x) out[static_cast<std::size_t>(y * side + x)] = row[x];
   }
-  mean /= static_cast<double>(out.size());
-  double ss = 0;
-  for (float& a : out)
-  {
-    a = static_cast<float>(a - mean);
-    ss += static_cast<double>(a) * a;
-  }
-  if (!(ss > 1e-6 * out.size())) return {};
-  const float s = static_cast<float>(1.0 / std::sqrt(ss));
-  for (float& a : out) a *= s;
+  normalizeZeroMean(out);
   return out;
 }
 }  // namespace

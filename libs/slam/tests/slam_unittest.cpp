@@ -567,6 +567,21 @@ cv::Mat viewPlane(const cv::Mat& tex, const Mat3& K, const Mat3& R, const Vec3& 
   cv::warpPerspective(tex, img, Hc, cv::Size(320, 240), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(128));
   return img;
 }
+/** The map of a first view of the plane (camera at the origin): its corners, on the plane, with their
+ * templates. */
+std::vector<TRelocPoint> planeMap(const cv::Mat& tex, const Mat3& K, const camera::CCameraModel& cam)
+{
+  const cv::Mat img0 = viewPlane(tex, K, Mat3::Identity(), Vec3::Zero());
+  std::vector<TRelocPoint> pts;
+  for (const auto& c : frontend::detectInEmptyCells(img0, {}, 48, frontend::TDetectorParams{}))
+  {
+    frontend::CFeaturePatch patch;
+    if (!patch.extract(img0, c.uv, 5)) continue;
+    const Vec3 b = cam.unproject(c.uv).unitVector();
+    pts.push_back(TRelocPoint{static_cast<std::int64_t>(pts.size()), Vec3(b * (3.0 / b.z())), {patch.originalTemplate()}});
+  }
+  return pts;
+}
 }  // namespace
 
 TEST(Relocalisation, FindsThePoseOfATexturedPlaneAndNothingElsewhere)
@@ -575,19 +590,8 @@ TEST(Relocalisation, FindsThePoseOfATexturedPlaneAndNothingElsewhere)
   Mat3 K;
   K << 200, 0, 160, 0, 200, 120, 0, 0, 1;
   const cv::Mat tex = randomTexture(5);
-  // The map: corners of a first view (camera at the origin), on the plane, with their patches.
-  const cv::Mat img0 = viewPlane(tex, K, Mat3::Identity(), Vec3::Zero());
-  frontend::TDetectorParams dp;
-  const auto corners = frontend::detectInEmptyCells(img0, {}, 48, dp);
-  ASSERT_GE(corners.size(), 30u);
-  std::vector<frontend::CFeaturePatch> patches(corners.size());
-  std::vector<TRelocPoint> pts;
-  for (std::size_t k = 0; k < corners.size(); ++k)
-  {
-    ASSERT_TRUE(patches[k].extract(img0, corners[k].uv, 5));
-    const Vec3 b = cam->unproject(corners[k].uv).unitVector();
-    pts.push_back(TRelocPoint{static_cast<std::int64_t>(k), Vec3(b * (3.0 / b.z())), {patches[k].originalTemplate()}});
-  }
+  const std::vector<TRelocPoint> pts = planeMap(tex, K, *cam);
+  ASSERT_GE(pts.size(), 30u);
   // A second view: turned by 4 degrees (mostly a pan) and moved by 0.35 units.
   const Vec4 q1 = math::quatFromRotationVector(Vec3(0.01, 0.07, 0.015));
   const Vec3 t1(0.25, -0.1, 0.2);
@@ -619,18 +623,8 @@ TEST(Relocalisation, RepeatedTextureGivesNoWrongPose)
   cv::Mat tile = randomTexture(7)(cv::Rect(100, 100, 40, 40)).clone();
   cv::Mat tex;
   cv::repeat(tile, 20, 20, tex);
-  const cv::Mat img0 = viewPlane(tex, K, Mat3::Identity(), Vec3::Zero());
-  frontend::TDetectorParams dp;
-  const auto corners = frontend::detectInEmptyCells(img0, {}, 48, dp);
-  ASSERT_GE(corners.size(), 20u);
-  std::vector<frontend::CFeaturePatch> patches(corners.size());
-  std::vector<TRelocPoint> pts;
-  for (std::size_t k = 0; k < corners.size(); ++k)
-  {
-    ASSERT_TRUE(patches[k].extract(img0, corners[k].uv, 5));
-    const Vec3 b = cam->unproject(corners[k].uv).unitVector();
-    pts.push_back(TRelocPoint{static_cast<std::int64_t>(k), Vec3(b * (3.0 / b.z())), {patches[k].originalTemplate()}});
-  }
+  const std::vector<TRelocPoint> pts = planeMap(tex, K, *cam);
+  ASSERT_GE(pts.size(), 20u);
   const Vec4 q1 = math::quatFromRotationVector(Vec3(0.0, 0.03, 0.0));
   const Vec3 t1(0.3, 0.05, 0.1);
   const TRelocalisation res = relocalise(viewPlane(tex, K, math::quatToRotation(q1), t1), *cam, pts, TRelocaliseParams{});
