@@ -17,6 +17,7 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -299,6 +300,31 @@ TEST(RobustConditions, TexturelessFramesForTwoSecondsThenNormal)
     const auto f = figures("textureless 2 s, " + cfg, run, kEvent0, kEvent1);
     expectContinuous(run, kFrames, 50);
     EXPECT_GE(f.matchedAfter, 5);
+  }
+}
+
+TEST(RobustConditions, ExposureJumpAndMotionBlur)
+{
+  // Two camera faults of real video, 1 s each: the auto-exposure overshooting (gain 1.8, +20 grey
+  // levels, saturating: textures in the bright parts are clipped away), then motion blur (a 7-px
+  // horizontal smear). Tracking must hold or come back in the same map.
+  constexpr std::size_t x0 = 90, x1 = 120, b0 = 180, b1 = 210;
+  for (const auto& cfg : kConfigs)
+  {
+    SCOPED_TRACE(cfg);
+    const TRun run = runSystem(cfg, handheld(), [](std::size_t k, cv::Mat& g, const cv::Mat&) {
+      if (k >= x0 && k < x1) g.convertTo(g, CV_8U, 1.8, 20);
+      if (k >= b0 && k < b1) cv::blur(g, g, cv::Size(7, 1));
+      return true;
+    });
+    ASSERT_FALSE(HasFailure());
+    const auto fx = figures("exposure jump 1 s, " + cfg, run, x0, x1);
+    const auto fb = figures("motion blur 1 s, " + cfg, run, b0, b1);
+    expectContinuous(run, kFrames, 50);
+    EXPECT_LT(fx.ateAfterHeld, 0.1);
+    EXPECT_LT(fb.ateAfterHeld, 0.1);
+    EXPECT_GE(fx.matchedDuring, 3);
+    EXPECT_GE(fb.matchedDuring, 3);
   }
 }
 
