@@ -328,6 +328,35 @@ TEST(RobustConditions, ExposureJumpAndMotionBlur)
   }
 }
 
+TEST(RobustConditions, KidnappedIntoAnUnmappedSceneStartsANewMap)
+{
+  // From frame 150 on, the images are those of another scene (another seed: another world and path):
+  // the camera is carried somewhere the map has never been. Relocalisation finds nothing there; the
+  // system must not wait for the old map for long, but track the new scene on new features.
+  static const TSequence other = render("ini/scenarios/handheld.ini", kFrames, {"scenario.seed=77"});
+  constexpr std::size_t kidnap = 150;
+  for (const auto& cfg : kConfigs)
+  {
+    SCOPED_TRACE(cfg);
+    const TRun run = runSystem(cfg, handheld(), [](std::size_t k, cv::Mat& g, const cv::Mat&) {
+      if (k >= kidnap) other.frames[k].grey.copyTo(g);
+      return true;
+    });
+    ASSERT_FALSE(HasFailure());
+    long resumed = -1;  // frames after the kidnap until >= 10 matches again
+    for (std::size_t i = 0; i < run.k.size(); ++i)
+      if (run.k[i] >= kidnap && run.matched[i] >= 10)
+      {
+        resumed = static_cast<long>(run.k[i] - kidnap);
+        break;
+      }
+    std::printf("[ result   ] kidnapped at frame %zu, %-16s tracking (>= 10 matches) resumed after %ld frames\n", kidnap,
+                cfg.c_str(), resumed);
+    EXPECT_GE(resumed, 0);
+    EXPECT_LE(resumed, 15);
+  }
+}
+
 TEST(RobustConditions, TenDroppedFrames)
 {
   constexpr std::size_t g0 = 150, g1 = 160;

@@ -122,6 +122,7 @@ const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& 
     m_report.tPredictMs = msSince(t);
 
     m_report.lostFrames = m_lostFrames;
+    m_sawNoMap = false;
     // Lost in the previous frame, or a gap in the frames over which the motion models' prediction
     // cannot be trusted: look for the map in the whole image first.
     if (relocalising() || (m_opts.relocalise && m_opts.relocalise_after_gap > 0 &&
@@ -229,6 +230,7 @@ bool CMonoSlamIMM::tryRelocalise(const cv::Mat& grey)
   p.minInliers = m_opts.relocalise_min_inliers;
   p.reprojectionPx = std::max(2.0, 3.0 * m_sigmaPixel);
   const TRelocalisation res = relocalise(grey, *m_cam, pts, p);
+  m_sawNoMap = res.nCorners >= 4 * p.minInliers && res.nCorrespondences < p.minInliers;
   m_report.nRelocMatches = res.nCorrespondences;
   m_report.nRelocInliers = static_cast<int>(res.inlierIds.size());
   if (!res.ok) return false;
@@ -272,14 +274,24 @@ void CMonoSlamIMM::updateLostState()
   int known = 0;
   for (const auto& f : m_features) known += depthKnown(f) ? 1 : 0;
   const bool lost = m_report.nMatched < 3 && known >= m_opts.relocalise_min_inliers;
+  const bool wasHolding = relocalising();
   m_lostFrames = lost ? m_lostFrames + 1 : 0;
+  m_noMapFrames = lost && m_sawNoMap ? m_noMapFrames + 1 : 0;
+  if (wasHolding && mapGivenUp())
+  {
+    // The map is given up: its features must prove themselves again. With their records cleared, the
+    // deletion rule removes those not found in the next delete_min_predictions searches (a lifetime
+    // of matches would otherwise keep a feature the camera has left for hundreds of frames), and
+    // keeps those the camera finds again.
+    for (auto& f : m_features) f.nPredicted = f.nMatched = 0;
+  }
   if (!lost)
   {
     m_sinceTracked = 0;
     m_lastTrackedR = m_rWC;
     m_lastTrackedQ = m_qWC;
   }
-  if (!lost || m_lostFrames > m_opts.relocalise_max_frames) return;
+  if (!lost || !relocalising()) return;
   // A frame-level failure (blackout, blur, a motion no model predicted) says nothing about the
   // features themselves: their failed searches do not count towards the deletion rule.
   std::unordered_map<std::int64_t, int> index;
@@ -406,13 +418,17 @@ std::vector<frontend::TCorner> CMonoSlamIMM::findNewFeatureCandidates(const cv::
                                                                       const std::vector<Vec2>& alsoOccupied) const
 {
   std::vector<Vec2> occupied = alsoOccupied;
-  for (const auto& rec : m_report.searches) occupied.push_back(rec.found ? rec.z : rec.h);
-  // Features not searched this frame but predicted inside the image still occupy their cell.
-  for (const auto& f : m_features)
+  // (A map given up is not where its features are predicted: their cells are free.)
+  if (!mapGivenUp())
   {
-    Vec2 uv;
-    if (f.lastSeenFrame != m_frame && predictMeasurement(*m_cam, m_xFused, f, uv) && m_cam->isInImage(uv))
-      occupied.push_back(uv);
+    for (const auto& rec : m_report.searches) occupied.push_back(rec.found ? rec.z : rec.h);
+    // Features not searched this frame but predicted inside the image still occupy their cell.
+    for (const auto& f : m_features)
+    {
+      Vec2 uv;
+      if (f.lastSeenFrame != m_frame && predictMeasurement(*m_cam, m_xFused, f, uv) && m_cam->isInImage(uv))
+        occupied.push_back(uv);
+    }
   }
   frontend::TDetectorParams p;
   p.fastThreshold = m_opts.fast_threshold;

@@ -45,6 +45,7 @@ void CMonoSlamIMM::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileB
   IMMSLAM_LOAD_INT(relocalise_min_inliers);
   IMMSLAM_LOAD_INT(relocalise_max_frames);
   IMMSLAM_LOAD_DOUBLE(relocalise_after_gap);
+  IMMSLAM_LOAD_INT(relocalise_patience);
   IMMSLAM_LOAD_INT(num_threads);
   IMMSLAM_LOAD_INT(seed);
   validate(s);
@@ -86,6 +87,7 @@ void CMonoSlamIMM::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, 
   MRPT_SAVE_CONFIG_VAR_COMMENT(relocalise, "when tracking is lost, keep the map and find it again (PnP on its templates)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(relocalise_min_inliers, "PnP inliers needed to accept a relocalisation");
   MRPT_SAVE_CONFIG_VAR_COMMENT(relocalise_max_frames, "lost frames (in a row) during which the map is kept; then MonoSLAM's deletion resumes");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(relocalise_patience, "give the map up after this many attempts in a row that see texture but not the map");
   MRPT_SAVE_CONFIG_VAR_COMMENT(relocalise_after_gap, "also relocalise at a frame more than this many frame periods after the last (0 = never)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(num_threads, "worker threads of the IMM bank (1 = no threads)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(seed, "random seed (1-point RANSAC)");
@@ -122,6 +124,7 @@ void CMonoSlamIMM::TOptions::validate(const std::string& s) const
   core::requireInRange(relocalise_min_inliers, 4, 10000, s, "relocalise_min_inliers");
   core::requireInRange(relocalise_max_frames, 0, 1000000, s, "relocalise_max_frames");
   core::requireInRange(relocalise_after_gap, 0, 1e9, s, "relocalise_after_gap");
+  core::requireInRange(relocalise_patience, 1, 1000000, s, "relocalise_patience");
   core::requireInRange(delete_min_match_ratio, 0, 1, s, "delete_min_match_ratio");
   core::requirePositive(linearity_threshold, s, "linearity_threshold");
   core::requireInRange(num_threads, 1, 64, s, "num_threads");

@@ -94,7 +94,7 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
       // Without parallax nothing can be classified. While the IMM says the camera is not translating
       // (stationary and rotation families dominate), the SLAM takes the unresolved features it needs,
       // as the IMM paper's filter does with inverse depth; with translation, only when starving.
-      const int inView = rep.nPredicted + static_cast<int>(promotions.size());
+      const int inView = (m_slam->mapGivenUp() ? 0 : rep.nPredicted) + static_cast<int>(promotions.size());
       double pGeneral = 0;
       const VecX mu = m_slam->modelProbabilities();
       for (int i = 0; i < mu.size(); ++i)
@@ -143,7 +143,7 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
     }
     // Map management: new features where the image is empty of SLAM and shadow features.
     const auto& so = m_slam->options();
-    const int visible = rep.nPredicted + pendingVisible;
+    const int visible = (m_slam->mapGivenUp() ? 0 : rep.nPredicted) + pendingVisible;
     // While the SLAM is lost and keeps its map to find it again, new features would be placed with a
     // pose it knows to be wrong: none are added until it relocalises or gives the map up.
     const int want = m_slam->relocalising()

@@ -196,11 +196,16 @@ class CMonoSlamIMM
      * looked for in the whole image: a PnP pose with at least relocalise_min_inliers inliers replaces
      * the prediction (applyPoseCorrection) before the active search. The same is tried at a frame
      * that comes more than relocalise_after_gap frame periods after the last (dropped frames: the
-     * motion models' extrapolation over the gap is no prediction to search with). */
+     * motion models' extrapolation over the gap is no prediction to search with). The map is given up
+     * early when relocalise_patience attempts in a row see a textured image (at least 4 x
+     * relocalise_min_inliers corners) but fewer than relocalise_min_inliers of the map's features in
+     * it: the camera is somewhere the map has never been (or behind a textured occluder), and waiting
+     * would only delay the new map. */
     bool relocalise = true;
     int relocalise_min_inliers = 8;
     int relocalise_max_frames = 90;
     double relocalise_after_gap = 10;
+    int relocalise_patience = 5;
     int num_threads = 2;                        ///< worker threads for the bank (1: none)
     int seed = 1;                               ///< RANSAC random seed (determinism)
 
@@ -227,8 +232,9 @@ class CMonoSlamIMM
    * \param z (feature id, measured pixel) pairs; unknown ids are ignored. */
   const TFrameReport& processMeasurements(double timestamp, const std::vector<std::pair<std::int64_t, Vec2>>& z);
 
-  /** Corners of the image in cells empty of current features (predicted positions), at most maxNew;
-   * `alsoOccupied` are extra positions to avoid (e.g. shadow-filter features). */
+  /** Corners of the image in cells empty of current features (predicted positions; none when
+   * mapGivenUp()), at most maxNew; `alsoOccupied` are extra positions to avoid (e.g. shadow-filter
+   * features). */
   std::vector<frontend::TCorner> findNewFeatureCandidates(const cv::Mat& grey, int maxNew,
                                                           const std::vector<Vec2>& alsoOccupied = {}) const;
 
@@ -281,8 +287,14 @@ class CMonoSlamIMM
    * add new features now. */
   bool relocalising() const
   {
-    return m_opts.relocalise && m_lostFrames > 0 && m_lostFrames <= m_opts.relocalise_max_frames;
+    return m_opts.relocalise && m_lostFrames > 0 && m_lostFrames <= m_opts.relocalise_max_frames &&
+           m_noMapFrames < m_opts.relocalise_patience;
   }
+  /** Tracking is lost and the map was given up (relocalise_max_frames or relocalise_patience): the
+   * features of the map are no longer expected in the image; new ones are needed at once (callers
+   * count none of the map's as visible, and findNewFeatureCandidates() ignores their cells). The map's
+   * features stay in the state until the deletion rule removes them. */
+  bool mapGivenUp() const { return m_opts.relocalise && m_lostFrames > 0 && !relocalising(); }
   /** Removes features by id from every mode (e.g. caught moving). */
   void removeFeatures(const std::vector<std::int64_t>& ids);
 
@@ -362,5 +374,7 @@ class CMonoSlamIMM
   Vec3 m_lastTrackedR = Vec3::Zero();    ///< fused T_W_C at the end of the last frame not lost
   Vec4 m_lastTrackedQ = Vec4(1, 0, 0, 0);
   double m_sinceTracked = 0;  ///< frame periods since the end of the last frame not lost
+  int m_noMapFrames = 0;      ///< lost frames in a row whose relocalisation saw texture but not the map
+  bool m_sawNoMap = false;    ///< this frame's relocalisation attempt saw texture but not the map
 };
 }  // namespace immslam::slam
