@@ -87,7 +87,7 @@ void CMonoSlamIMM::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, 
   MRPT_SAVE_CONFIG_VAR_COMMENT(relocalise, "when tracking is lost, keep the map and find it again (PnP on its templates)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(relocalise_min_inliers, "PnP inliers needed to accept a relocalisation");
   MRPT_SAVE_CONFIG_VAR_COMMENT(relocalise_max_frames, "lost frames (in a row) during which the map is kept; then MonoSLAM's deletion resumes");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(relocalise_patience, "give the map up after this many attempts in a row that see texture but not the map");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(relocalise_patience, "give the map up after this many failed attempts in a row on textured images");
   MRPT_SAVE_CONFIG_VAR_COMMENT(relocalise_after_gap, "also relocalise at a frame more than this many frame periods after the last (0 = never)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(num_threads, "worker threads of the IMM bank (1 = no threads)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(seed, "random seed (1-point RANSAC)");

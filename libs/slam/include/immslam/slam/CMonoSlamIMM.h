@@ -189,8 +189,9 @@ class CMonoSlamIMM
     double delete_min_match_ratio = 0.5;        ///< ...delete if matched/predicted is below this
     bool convert_to_xyz = true;
     double linearity_threshold = 0.1;           ///< ID -> XYZ when the linearity index is below (ref. [3])
-    /** Relocalisation (relocalise.h). A frame with fewer than 3 measurements used while the map holds at
-     * least relocalise_min_inliers features of known depth is a lost frame. While lost (up to
+    /** Relocalisation (relocalise.h). A frame with fewer than 3 measurements used, or with a fifth or
+     * less of its searches, while the map holds at least relocalise_min_inliers well-localised features
+     * (XYZ, or inverse depth to 25 %) is a lost frame. While lost (up to
      * relocalise_max_frames frames in a row) the failed searches do not count towards the deletion
      * rule, the caller holds new features (relocalising()), and each frame the map's templates are
      * looked for in the whole image: a PnP pose with at least relocalise_min_inliers inliers replaces
@@ -198,9 +199,8 @@ class CMonoSlamIMM
      * that comes more than relocalise_after_gap frame periods after the last (dropped frames: the
      * motion models' extrapolation over the gap is no prediction to search with). The map is given up
      * early when relocalise_patience attempts in a row see a textured image (at least 4 x
-     * relocalise_min_inliers corners) but fewer than relocalise_min_inliers of the map's features in
-     * it: the camera is somewhere the map has never been (or behind a textured occluder), and waiting
-     * would only delay the new map. */
+     * relocalise_min_inliers corners) but give no pose: the camera is somewhere the map has never been
+     * (or behind a textured occluder), and waiting would only delay the new map. */
     bool relocalise = true;
     int relocalise_min_inliers = 8;
     int relocalise_max_frames = 90;
@@ -331,6 +331,8 @@ class CMonoSlamIMM
   double frameDt(double timestamp);
   /** Looks for the map in the whole image and, if found, re-expresses every mode in the found pose. */
   bool tryRelocalise(const cv::Mat& grey);
+  /** XYZ, or inverse depth with sigma_rho < 25 % of rho: usable by the relocalisation's PnP. */
+  bool wellLocalised(const TFeature& f) const;
   /** Lost-frame bookkeeping at the end of a frame (before the map management). */
   void updateLostState();
 
