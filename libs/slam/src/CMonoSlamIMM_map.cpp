@@ -275,12 +275,17 @@ bool CMonoSlamIMM::tryRelocalise(const cv::Mat& grey)
 void CMonoSlamIMM::updateLostState()
 {
   if (!m_opts.relocalise) return;
-  int known = 0;
-  for (const auto& f : m_features) known += wellLocalised(f) ? 1 : 0;
   // Lost: (almost) nothing matched, or a fifth or less of what was searched (normal frames never come
-  // close: 0-2 such frames in the 1000 of monoslam_testseq and the 99 of visp_rbt).
+  // close: 0-2 such frames in the 1000 of monoslam_testseq and the 99 of visp_rbt), with a map that
+  // relocalisation could find.
   const bool failed = m_report.nMatched < 3 || (m_report.nPredicted >= 10 && m_report.nMatched < 0.2 * m_report.nPredicted);
-  const bool lost = failed && known >= m_opts.relocalise_min_inliers;
+  const auto enoughLocalised = [this] {
+    int known = 0;
+    for (const auto& f : m_features)
+      if (wellLocalised(f) && ++known >= m_opts.relocalise_min_inliers) return true;
+    return false;
+  };
+  const bool lost = failed && enoughLocalised();
   const bool wasHolding = relocalising();
   m_lostFrames = lost ? m_lostFrames + 1 : 0;
   m_noMapFrames = lost && m_sawNoMap ? m_noMapFrames + 1 : 0;
