@@ -1,4 +1,5 @@
 /* imm-monoslam — relocalisation: map templates matched at the image's corners, RANSAC PnP. */
+#include <immslam/frontend/frontend.h>
 #include <immslam/math/quaternion.h>
 #include <immslam/slam/relocalise.h>
 

@@ -630,5 +630,8 @@ TEST(Relocalisation, RepeatedTextureGivesNoWrongPose)
   const TRelocalisation res = relocalise(viewPlane(tex, K, math::quatToRotation(q1), t1), *cam, pts, TRelocaliseParams{});
   std::printf("[ info     ] repeated texture: %d corners, %d unambiguous matches, %s\n", res.nCorners,
               res.nCorrespondences, res.ok ? "relocalised" : "no relocalisation");
-  if (res.ok) EXPECT_LT((res.r_CW - t1).norm(), 0.05);  // if a pose is given, it is the right one
+  if (res.ok)
+  {
+    EXPECT_LT((res.r_CW - t1).norm(), 0.05);  // if a pose is given, it is the right one
+  }
 }

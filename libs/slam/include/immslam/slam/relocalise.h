@@ -13,7 +13,6 @@
 #pragma once
 
 #include <immslam/camera/CCameraModel.h>
-#include <immslam/frontend/frontend.h>
 #include <immslam/math/types.h>
 
 #include <opencv2/core/mat.hpp>
