@@ -78,6 +78,10 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
   const auto& rep = *m_frame.slam;
   if (rep.frame > 0)
   {
+    // SLAM features expected in view: none of a map the SLAM has given up (lost, not relocalised).
+    const int slamInView = m_slam->mapGivenUp() ? 0 : rep.nPredicted;
+    // Lost and holding the map for relocalisation: nothing is placed with a pose known to be wrong.
+    const bool holding = m_slam->relocalising();
     int pendingVisible = 0;
     std::vector<Vec2> avoid;
     if (m_shadow)
@@ -88,19 +92,17 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
       const auto& srep = m_shadow->processFrame(cameraMotion(timestamp, rep.dtFrames), grey);
       m_frame.shadow = &srep;
       std::vector<shadow::TPromotion> promotions = srep.promotions;
-      // A SLAM that is lost would place them with a pose it knows to be wrong: dropped.
-      const bool lost = m_slam->relocalising();
-      if (lost) promotions.clear();
+      if (holding) promotions.clear();
       // Without parallax nothing can be classified. While the IMM says the camera is not translating
       // (stationary and rotation families dominate), the SLAM takes the unresolved features it needs,
       // as the IMM paper's filter does with inverse depth; with translation, only when starving.
-      const int inView = (m_slam->mapGivenUp() ? 0 : rep.nPredicted) + static_cast<int>(promotions.size());
+      const int inView = slamInView + static_cast<int>(promotions.size());
       double pGeneral = 0;
       const VecX mu = m_slam->modelProbabilities();
       for (int i = 0; i < mu.size(); ++i)
         if (m_slam->models()[i].family == motion::EMotionFamily::General) pGeneral += mu[i];
       const int need = pGeneral < 0.5 ? m_slam->options().min_visible_features : m_opts.starved_below;
-      if (!lost && m_opts.starved_below > 0 && inView < need)
+      if (!holding && m_opts.starved_below > 0 && inView < need)
       {
         const auto rel = m_shadow->releaseUnresolved(need - inView, m_opts.release_min_measured);
         m_frame.released = static_cast<int>(rel.size());
@@ -143,12 +145,8 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
     }
     // Map management: new features where the image is empty of SLAM and shadow features.
     const auto& so = m_slam->options();
-    const int visible = (m_slam->mapGivenUp() ? 0 : rep.nPredicted) + pendingVisible;
-    // While the SLAM is lost and keeps its map to find it again, new features would be placed with a
-    // pose it knows to be wrong: none are added until it relocalises or gives the map up.
-    const int want = m_slam->relocalising()
-                         ? 0
-                         : std::clamp(so.min_visible_features - visible, 0, so.max_new_features_per_frame);
+    const int visible = slamInView + pendingVisible;
+    const int want = holding ? 0 : std::clamp(so.min_visible_features - visible, 0, so.max_new_features_per_frame);
     if (want > 0)
     {
       std::vector<Vec2> uv;

@@ -376,7 +376,7 @@ class CMonoSlamIMM
   Vec3 m_lastTrackedR = Vec3::Zero();    ///< fused T_W_C at the end of the last frame not lost
   Vec4 m_lastTrackedQ = Vec4(1, 0, 0, 0);
   double m_sinceTracked = 0;  ///< frame periods since the end of the last frame not lost
-  int m_noMapFrames = 0;      ///< lost frames in a row whose relocalisation saw texture but not the map
-  bool m_sawNoMap = false;    ///< this frame's relocalisation attempt saw texture but not the map
+  int m_noMapFrames = 0;      ///< lost frames in a row whose relocalisation failed on a textured image
+  bool m_sawNoMap = false;    ///< this frame's relocalisation attempt failed on a textured image
 };
 }  // namespace immslam::slam
