@@ -85,22 +85,39 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
     if (m.x.size() != n || m.P.rows() != n || m.P.cols() != n)
       throw std::logic_error("IMM::mix: modes have different dimensions");
 
-  // Split of the weights: W_ji = (beta_i + Delta_ji) mu^j / c_i with beta_i = min_j pi_ji (the
-  // column minimum, diagonal included) and Delta_ji = pi_ji - beta_i >= 0. m_mixB[i] = beta_i / c_i
-  // weighs the common term S + T, m_mixA(j, i) = Delta_ji mu^j / c_i mode j's own term. A mode with
-  // c_i = 0 keeps its Gaussian (identity column of W): its B and A stay 0.
+  // Split of the weights: W_ji = (beta_i + Delta_ji) mu^j / c_i over the support J_i = {j: pi_ji > 0}
+  // with beta_i = min_{j in J_i} pi_ji (the column minimum, diagonal included, when the column has no
+  // zero) and Delta_ji = pi_ji - beta_i >= 0. m_mixB[i] = beta_i / c_i weighs the common term of J_i,
+  // S_J + T_J, m_mixA(j, i) = Delta_ji mu^j / c_i mode j's own term. A mode with c_i = 0 keeps its
+  // Gaussian (identity column of W): its B and A stay 0. Outputs with the same support share one
+  // common term (one group for a pi without zeros).
   m_mixA.setZero(r, r);
   m_mixB.setZero(r);
-  bool common = false;
+  m_mixGroup.assign(r, -1);
+  m_mixSupp.clear();
+  std::vector<char> supp(r);
   for (int i = 0; i < r; ++i)
   {
     if (!(m_muPred[i] > 0)) continue;
-    const double beta = pi.col(i).minCoeff();
-    m_mixB[i] = beta / m_muPred[i];
-    common = common || m_mixB[i] > 0;
+    double beta = 0;
     for (int j = 0; j < r; ++j)
-      if (m_mu[j] > 0) m_mixA(j, i) = (pi(j, i) - beta) * m_mu[j] / m_muPred[i];
+    {
+      supp[j] = pi(j, i) > 0 ? 1 : 0;
+      if (supp[j] && (beta == 0 || pi(j, i) < beta)) beta = pi(j, i);
+    }
+    m_mixB[i] = beta / m_muPred[i];
+    // Entries equal up to rounding (a matrix read from an ini and renormalized) count as equal: a
+    // Delta_ji of a few ulps would only cost an own term (and the in-place mixing).
+    for (int j = 0; j < r; ++j)
+      if (m_mu[j] > 0 && supp[j] && pi(j, i) - beta > 1e-12 * beta)
+        m_mixA(j, i) = (pi(j, i) - beta) * m_mu[j] / m_muPred[i];
+    if (!(m_mixB[i] > 0)) continue;
+    const auto g = std::find(m_mixSupp.begin(), m_mixSupp.end(), supp);
+    m_mixGroup[i] = static_cast<int>(g - m_mixSupp.begin());
+    if (g == m_mixSupp.end()) m_mixSupp.push_back(supp);
   }
+  const int nGroups = static_cast<int>(m_mixSupp.size());
+  const bool common = nGroups > 0;
 
   // Means. xbar^i = sum_j W_ji x^j (as the textbook); the spreads are expanded around
   // xm = sum_j mu^j x^j: y_j = x^j - xm and ybar_i = sum_j W_ji y_j (= xbar^i - xm), differences.
@@ -114,6 +131,17 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
     m_mixY.col(j) = m_modes[j].x - m_mixXm;
     m_mixMuYT.row(j) = m_mu[j] * m_mixY.col(j).transpose();
   }
+  // A group whose support is every input uses m_mixMuYT itself; others a copy with the rows outside it zero.
+  m_mixMuYTg.resize(nGroups);
+  for (int g = 0; g < nGroups; ++g)
+    if (std::find(m_mixSupp[g].begin(), m_mixSupp[g].end(), 0) != m_mixSupp[g].end())
+    {
+      m_mixMuYTg[g] = m_mixMuYT;
+      for (int j = 0; j < r; ++j)
+        if (!m_mixSupp[g][j]) m_mixMuYTg[g].row(j).setZero();
+    }
+    else
+      m_mixMuYTg[g].resize(0, 0);
   m_mixXbar.setZero(n, r);
   m_mixYbar.setZero(n, r);
   for (int i = 0; i < r; ++i)
@@ -139,22 +167,26 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
   // column does not depend on the chunk or the thread, so the result is bitwise the same for any pool.
   constexpr Eigen::Index chunk = 16;
   const int nChunks = static_cast<int>((n + chunk - 1) / chunk);
-  if (common) m_mixU.resize(n, nChunks);  // one column of S + T per chunk
+  if (common) m_mixU.resize(n, static_cast<Eigen::Index>(nChunks) * nGroups);  // one column per chunk and group
   auto job = [&](int t) {
     const Eigen::Index c0 = static_cast<Eigen::Index>(t) * chunk, c1 = std::min(n, c0 + chunk);
     for (Eigen::Index col = c0; col < c1; ++col)
     {
       const Eigen::Index h = n - col;
-      // u = (S + T)(col:n, col) = sum_j mu^j (y_j y_j(col) + P^j(:, col))
-      Eigen::Map<VecX> u(common ? m_mixU.col(t).data() + col : nullptr, common ? h : 0);
-      if (common)
+      // u_g = (S_J + T_J)(col:n, col) = sum_{j in J} mu^j (y_j y_j(col) + P^j(:, col))
+      for (int g = 0; g < nGroups; ++g)
       {
-        u.noalias() = m_mixY.bottomRows(h) * m_mixMuYT.col(col);
+        Eigen::Map<VecX> u(m_mixU.col(static_cast<Eigen::Index>(t) * nGroups + g).data() + col, h);
+        const MatX& muYT = m_mixMuYTg[g].size() ? m_mixMuYTg[g] : m_mixMuYT;
+        u.noalias() = m_mixY.bottomRows(h) * muYT.col(col);
         for (int j = 0; j < r; ++j)
-          if (m_mu[j] > 0) u += m_mu[j] * m_modes[j].P.col(col).tail(h);
+          if (m_mu[j] > 0 && m_mixSupp[g][j]) u += m_mu[j] * m_modes[j].P.col(col).tail(h);
       }
       for (int i = 0; i < r; ++i)
       {
+        const int grp = m_mixGroup[i];
+        Eigen::Map<VecX> u(grp >= 0 ? m_mixU.col(static_cast<Eigen::Index>(t) * nGroups + grp).data() + col : nullptr,
+                           grp >= 0 ? h : 0);
         auto o = (inplace ? m_modes[i].P : m_scratch[i]).col(col).tail(h);
         if (!(m_muPred[i] > 0))
         {

@@ -64,7 +64,11 @@ class CIMMEstimator
    *     (P^j + y_j y_j^\top) - \bar y_i \bar y_i^\top, \qquad S = \sum_j \mu^j P^j,\;
    *     T = \sum_j \mu^j y_j y_j^\top \f]
    * S + T is shared by all outputs (skipped when every beta_i is 0; a column with beta_i = 0 skips
-   * it). For the default pi = transition_stay on the diagonal, the rest even, Delta is diagonal: each
+   * it). Where column i of pi has zeros (a mode that cannot be entered from some others), beta_i is the
+   * minimum over its support J_i = {j : pi_ji > 0} and the common term is S_J + T_J, the same sums over
+   * J_i only, computed once per distinct support: a block-structured pi (the shipped bank: no
+   * transition from a still or rotating mode into a general one, doc/imm.md) keeps Delta diagonal and
+   * the mixing in place. For the default pi = transition_stay on the diagonal, the rest even, Delta is diagonal: each
    * output is the common term plus its own mode. Rounding: the subtraction of ybar ybar^T costs
    * O(eps max_j |y_j|^2) absolutely, i.e. relative to the spread of the modes' means, not to |x|.
    * Cost O(r n^2) + O(nnz(Delta) n^2) flops (the direct sum is O(r^2 n^2)); memory: the lower
@@ -121,7 +125,10 @@ class CIMMEstimator
   MatX m_mixYbar;  ///< n x r: ybar_i = xbar^i - xm = sum_j mu^{j|i} y_j
   MatX m_mixXbar;  ///< n x r: the mixed means
   MatX m_mixA;     ///< r x r: (pi_ji - beta_i) mu^j / c_i, the weights above the column minimum
-  VecX m_mixB;     ///< r: beta_i / c_i, the weight of the common term S + T
-  MatX m_mixU;     ///< n x chunks: one column of S + T per column chunk
+  VecX m_mixB;     ///< r: beta_i / c_i, the weight of the common term S_J + T_J of output i's support
+  std::vector<int> m_mixGroup;               ///< r: the support group of output i (-1: no common term)
+  std::vector<std::vector<char>> m_mixSupp;  ///< per group: which inputs j it sums (pi_ji > 0)
+  std::vector<MatX> m_mixMuYTg;              ///< per group: r x n, m_mixMuYT with the rows outside it zero
+  MatX m_mixU;     ///< n x (chunks x groups): one column of each group's S_J + T_J per column chunk
 };
 }  // namespace immslam::bayes
