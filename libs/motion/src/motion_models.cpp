@@ -48,11 +48,12 @@ TMotionIncrement motionIncrement(const TMotionModel& m, const Vec3& v, const Vec
   {
     // A camera at rest on a hand, a tripod or a drone is never perfectly still: an optional
     // zero-mean angular jitter (random walk of the orientation, no velocity, no translation).
+    // The camera's shake (TMotionModel::shakePx) is such a jitter too: their variances add.
     inc.identity = true;
-    if (m.sigmaAngularPx > 0)
+    if (m.sigmaAngularPx > 0 || m.shakePx > 0)
     {
-      const double sw = m.sigmaAngularPx / focalPx * std::sqrt(dt);
-      inc.noiseCov.bottomRightCorner<3, 3>() = Mat3::Identity() * sw * sw;
+      const double var = (m.sigmaAngularPx * m.sigmaAngularPx + m.shakePx * m.shakePx) / (focalPx * focalPx) * dt;
+      inc.noiseCov.bottomRightCorner<3, 3>() = Mat3::Identity() * var;
       inc.J_dq_n.block<3, 3>(1, 3) = 0.5 * Mat3::Identity();  // d exp(w)/dw at w = 0
     }
     return inc;
@@ -64,6 +65,7 @@ TMotionIncrement motionIncrement(const TMotionModel& m, const Vec3& v, const Vec
   inc.noiseCov.bottomRightCorner<3, 3>() = Mat3::Identity() * sw * sw;
   inc.uNext.tail<3>() = w;
   inc.J_uNext_u.bottomRightCorner<3, 3>().setIdentity();
+  if (m.shakePx > 0) inc.shakeCov = Mat3::Identity() * (m.shakePx * m.shakePx / (focalPx * focalPx) * dt);
   if (m.family == EMotionFamily::General)
   {
     inc.t = v * dt;

@@ -103,6 +103,10 @@ void CMonoSlamIMM::predict(double dt)
     }
     // Dormant in the previous frame: likely dormant again. Mean and transition blocks only.
     predictRobocentricMean(g, m_features, inc, L.blocks);
+    if (inc.shakeCov.isZero())
+      L.shake.resize(0, 0);
+    else
+      L.shake = shakeFactor(g, m_features, inc.shakeCov);
     L.blockAt.assign(g.x.size(), -1);
     for (int b = 0; b < static_cast<int>(L.blocks.size()); ++b) L.blockAt[L.blocks[b].off] = b;
   });
@@ -119,6 +123,7 @@ void CMonoSlamIMM::materialize(int i)
   TLazyMode& L = m_lazy[i];
   if (!L.active) return;
   applyRobocentricTransition(m_imm->mode(i).P, L.blocks, m_scratch[i]);
+  if (L.shake.size()) addCovarianceFactor(m_imm->mode(i).P, L.shake);
   L.active = false;
 }
 
@@ -128,7 +133,12 @@ MatX CMonoSlamIMM::modePredictedBlock(int i, int off, int len)
   if (L.active)
   {
     const int b = off < static_cast<int>(L.blockAt.size()) ? L.blockAt[off] : -1;
-    if (b >= 0 && L.blocks[b].len == len) return transitionBlock(m_imm->mode(i).P, L.blocks[b]);
+    if (b >= 0 && L.blocks[b].len == len)
+    {
+      MatX blk = transitionBlock(m_imm->mode(i).P, L.blocks[b]);
+      if (L.shake.size()) blk.noalias() += L.shake.middleRows(off, len) * L.shake.middleRows(off, len).transpose();
+      return blk;
+    }
     materialize(i);  // not one transition block: predict the covariance after all
   }
   return m_imm->mode(i).P.block(off, off, len, len);
@@ -140,7 +150,12 @@ MatX CMonoSlamIMM::modePredictedColumns(int i, int off, int len)
   if (L.active)
   {
     const int b = off < static_cast<int>(L.blockAt.size()) ? L.blockAt[off] : -1;
-    if (b >= 0 && L.blocks[b].len == len) return transitionColumns(m_imm->mode(i).P, L.blocks, b);
+    if (b >= 0 && L.blocks[b].len == len)
+    {
+      MatX cols = transitionColumns(m_imm->mode(i).P, L.blocks, b);
+      if (L.shake.size()) cols.noalias() += L.shake * L.shake.middleRows(off, len).transpose();
+      return cols;
+    }
     materialize(i);
   }
   return m_imm->mode(i).P.middleCols(off, len);
@@ -314,6 +329,11 @@ double CMonoSlamIMM::modeLogLikelihood(int i, const bayes::CSparseJacobian& H, c
   }
   // S = H A P~ A^T H^T + R without forming A P~ A^T (O(n m)).
   MatX S = transitionInnovationCovariance(m_imm->mode(i).P, L.blocks, L.blockAt, H);
+  if (L.shake.size())
+  {
+    const MatX HF = H.times(L.shake);
+    S.noalias() += HF * HF.transpose();
+  }
   S = 0.5 * (S + S.transpose());
   S.diagonal() += Rdiag;
   return math::gaussianLogLikelihood(nu, S);

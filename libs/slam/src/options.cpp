@@ -135,10 +135,13 @@ void TIMMBankOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c,
   IMMSLAM_LOAD_STRING(models);
   IMMSLAM_LOAD_VECTOR(transition_matrix);
   IMMSLAM_LOAD_DOUBLE(transition_stay);
+  IMMSLAM_LOAD_STRING(general_entry);
   IMMSLAM_LOAD_VECTOR(prior);
   IMMSLAM_LOAD_DOUBLE(probability_floor);
   IMMSLAM_LOAD_DOUBLE(dormant_below);
   IMMSLAM_LOAD_BOOL(lazy_prediction);
+  IMMSLAM_LOAD_DOUBLE(shake_px);
+  core::requireInRange(shake_px, 0, 100, s, "shake_px");
   const int r = static_cast<int>(parseModels().size());
   transitionMatrix(r);  // validates
   priorProbabilities(r);
@@ -165,11 +168,13 @@ void TIMMBankOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const s
   c.write(s, "transition_matrix", joinNumbers(transition_matrix), mrpt::config::MRPT_SAVE_NAME_PADDING(),
           mrpt::config::MRPT_SAVE_VALUE_PADDING(), "r x r Markov matrix, row-major, rows sum to 1 ([] = from transition_stay)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(transition_stay, "diagonal of the default Markov matrix");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(general_entry, "markov: every mode may switch into a general one; evidence: not from a mode with v = 0 (doc/imm.md)");
   c.write(s, "prior", joinNumbers(prior), mrpt::config::MRPT_SAVE_NAME_PADDING(), mrpt::config::MRPT_SAVE_VALUE_PADDING(),
           "initial model probabilities ([] = uniform)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(probability_floor, "lower bound of every model probability");
   MRPT_SAVE_CONFIG_VAR_COMMENT(dormant_below, "modes below this probability given the frame are not updated (0 = exact IMM)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(lazy_prediction, "modes dormant in the previous frame: covariance predicted only if needed (exact)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(shake_px, "zero-mean angular shake of the camera in every model, px per frame (random walk; 0 = none)");
 }
 
 std::vector<motion::TMotionModel> TIMMBankOptions::parseModels() const
@@ -222,6 +227,7 @@ std::vector<motion::TMotionModel> TIMMBankOptions::parseModels() const
     {
       throw std::runtime_error("[imm] models: bad model '" + spec + "': " + e.what());
     }
+    m.shakePx = shake_px;
     m.name = m.displayName();
     // Identical models are allowed (e.g. to test that N identical models make one filter): number them.
     int copies = 0;
@@ -237,11 +243,30 @@ std::vector<motion::TMotionModel> TIMMBankOptions::parseModels() const
 MatX TIMMBankOptions::transitionMatrix(int r) const
 {
   MatX pi(r, r);
+  if (general_entry != "markov" && general_entry != "evidence")
+    throw std::runtime_error("[imm] general_entry: '" + general_entry + "' is not 'markov' or 'evidence'");
   if (transition_matrix.empty())
   {
     core::requireInRange(transition_stay, 0, 1, "imm", "transition_stay");
     pi.setConstant(r > 1 ? (1.0 - transition_stay) / (r - 1) : 0.0);
     pi.diagonal().setConstant(r > 1 ? transition_stay : 1.0);
+    if (general_entry == "evidence" && r > 1)
+    {
+      const auto models = parseModels();
+      if (static_cast<int>(models.size()) != r) throw std::logic_error("[imm] transition matrix: r differs from the models");
+      using F = motion::EMotionFamily;
+      for (int j = 0; j < r; ++j)
+      {
+        if (models[j].family == F::General) continue;
+        double rest = 1.0;
+        for (int i = 0; i < r; ++i)
+        {
+          if (i != j && models[i].family == F::General) pi(j, i) = 0.0;
+          if (i != j) rest -= pi(j, i);
+        }
+        pi(j, j) = rest;
+      }
+    }
     return pi;
   }
   if (static_cast<int>(transition_matrix.size()) != r * r)

@@ -54,10 +54,70 @@ void columnBlock(const TBlockJac& b, const std::vector<TBlockJac>& blocks, const
 }
 }  // namespace
 
+namespace
+{
+/** n x 6 factor L with L L^T = B N B^T, B = df/dn: a zero-mean jitter n of the camera (covariance N),
+ * applied at the identity increment to the state g (the world pose and every feature are
+ * re-expressed through the jitter rotation). */
+MatX cameraJitterFactor(const bayes::TGaussian& g, const std::vector<TFeature>& features, const Mat6& noiseCov,
+                        const motion::Mat36u& J_t_n, const motion::Mat46u& J_dq_n)
+{
+  const Eigen::Index n = g.x.size();
+  // Zero-mean jitter n of the camera: P += B N B^T with B = df/dn at the identity increment
+  // (the world pose and every feature are re-expressed through the jitter rotation).
+  MatX B = MatX::Zero(n, 6);
+  const Vec3 t0 = Vec3::Zero();
+  const Vec4 dq0(1, 0, 0, 0);
+  {
+    Mat3 J_t;
+    Mat34 J_dq;
+    features::transformPoint(g.x.segment<3>(0), dq0, t0, nullptr, &J_t, &J_dq);
+    Mat4 J_cq;
+    math::quatMultiply(dq0, g.x.segment<4>(3), &J_cq, nullptr);
+    B.topRows<3>() = J_t * J_t_n + J_dq * J_dq_n;
+    B.middleRows<4>(3) = J_cq * Vec4(1, -1, -1, -1).asDiagonal() * J_dq_n;
+  }
+  for (const auto& f : features)
+  {
+    if (f.kind == EFeatureKind::InverseDepth)
+    {
+      Eigen::Matrix<double, 6, 3> J_t;
+      Eigen::Matrix<double, 6, 4> J_dq;
+      features::transformInverseDepth(g.x.segment<6>(f.offset), dq0, t0, nullptr, &J_t, &J_dq);
+      B.middleRows<6>(f.offset) = J_t * J_t_n + J_dq * J_dq_n;
+    }
+    else
+    {
+      Mat3 J_t;
+      Mat34 J_dq;
+      features::transformPoint(g.x.segment<3>(f.offset), dq0, t0, nullptr, &J_t, &J_dq);
+      B.middleRows<3>(f.offset) = J_t * J_t_n + J_dq * J_dq_n;
+    }
+  }
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(noiseCov + 1e-30 * Eigen::Matrix<double, 6, 6>::Identity());
+  return B * llt.matrixL().toDenseMatrix();
+}
+}  // namespace
+
+void addCovarianceFactor(MatX& P, const MatX& F)
+{
+  P.selfadjointView<Eigen::Lower>().rankUpdate(F, 1.0);
+  P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
+}
+
+MatX shakeFactor(const bayes::TGaussian& g, const std::vector<TFeature>& features, const Mat3& shakeCov)
+{
+  // The shake is a rotation exp(s) of the camera after the motion: d exp(s)/ds = 0.5 [0; I] at s = 0.
+  Mat6 N = Mat6::Zero();
+  N.bottomRightCorner<3, 3>() = shakeCov;
+  motion::Mat46u J_dq_n = motion::Mat46u::Zero();
+  J_dq_n.block<3, 3>(1, 3) = 0.5 * Mat3::Identity();
+  return cameraJitterFactor(g, features, N, motion::Mat36u::Zero(), J_dq_n).rightCols<3>();
+}
+
 void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& features,
                         const motion::TMotionIncrement& inc, MatX& scratch)
 {
-  const Eigen::Index n = g.x.size();
   if (inc.identity)
   {
     // Stationary: nothing moves on average; the velocities are zero with zero variance.
@@ -65,46 +125,13 @@ void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& featur
     g.P.middleRows<6>(kU).setZero();
     g.P.middleCols<6>(kU).setZero();
     if (inc.noiseCov.isZero()) return;
-    // Zero-mean jitter n of the camera: P += B N B^T with B = df/dn at the identity increment
-    // (the world pose and every feature are re-expressed through the jitter rotation).
-    MatX B = MatX::Zero(n, 6);
-    const Vec3 t0 = Vec3::Zero();
-    const Vec4 dq0(1, 0, 0, 0);
-    {
-      Mat3 J_t;
-      Mat34 J_dq;
-      features::transformPoint(g.x.segment<3>(0), dq0, t0, nullptr, &J_t, &J_dq);
-      Mat4 J_cq;
-      math::quatMultiply(dq0, g.x.segment<4>(3), &J_cq, nullptr);
-      B.topRows<3>() = J_t * inc.J_t_n + J_dq * inc.J_dq_n;
-      B.middleRows<4>(3) = J_cq * Vec4(1, -1, -1, -1).asDiagonal() * inc.J_dq_n;
-    }
-    for (const auto& f : features)
-    {
-      if (f.kind == EFeatureKind::InverseDepth)
-      {
-        Eigen::Matrix<double, 6, 3> J_t;
-        Eigen::Matrix<double, 6, 4> J_dq;
-        features::transformInverseDepth(g.x.segment<6>(f.offset), dq0, t0, nullptr, &J_t, &J_dq);
-        B.middleRows<6>(f.offset) = J_t * inc.J_t_n + J_dq * inc.J_dq_n;
-      }
-      else
-      {
-        Mat3 J_t;
-        Mat34 J_dq;
-        features::transformPoint(g.x.segment<3>(f.offset), dq0, t0, nullptr, &J_t, &J_dq);
-        B.middleRows<3>(f.offset) = J_t * inc.J_t_n + J_dq * inc.J_dq_n;
-      }
-    }
-    const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(inc.noiseCov + 1e-30 * Eigen::Matrix<double, 6, 6>::Identity());
-    const MatX BL = B * llt.matrixL().toDenseMatrix();
-    g.P.selfadjointView<Eigen::Lower>().rankUpdate(BL, 1.0);
-    g.P.triangularView<Eigen::StrictlyUpper>() = g.P.transpose();
+    addCovarianceFactor(g.P, cameraJitterFactor(g, features, inc.noiseCov, inc.J_t_n, inc.J_dq_n));
     return;
   }
   thread_local std::vector<TTransitionBlock> blocks;
   predictRobocentricMean(g, features, inc, blocks);
   applyRobocentricTransition(g.P, blocks, scratch);
+  if (!inc.shakeCov.isZero()) addCovarianceFactor(g.P, shakeFactor(g, features, inc.shakeCov));
 }
 
 void applyPoseCorrection(bayes::TGaussian& g, const std::vector<TFeature>& features, const Vec3& r_CW_new,

@@ -228,6 +228,57 @@ TEST(Prediction, StationaryJitterCovariance)
   EXPECT_LT((G.P - Pexp).norm(), 1e-9);
 }
 
+TEST(Prediction, ShakeIsARotationAfterTheMotion)
+{
+  // A moving model with a shake: the same mean as without it, P' = P'_0 + B N_s B^T with B = d g(s)/ds
+  // for g(s) the predicted state re-expressed through a rotation exp(s) of the camera. In the
+  // stationary model the shake's variance adds to the model's own jitter.
+  const TToyState s = movingToyState();
+  std::mt19937 rng(23);
+  const int n = static_cast<int>(s.x.size());
+  const MatX P0 = randomCovariance(n, rng);
+  for (const auto* spec : {"general:1", "rotation:0.5"})
+  {
+    TIMMBankOptions b;
+    b.models = spec;
+    const auto plain = b.parseModels()[0];
+    b.shake_px = 0.3;
+    const auto shaken = b.parseModels()[0];
+    EXPECT_EQ(shaken.shakePx, 0.3);
+    const auto inc0 = motion::motionIncrement(plain, s.x.segment<3>(7), s.x.segment<3>(10), 2.0, 200);
+    const auto inc = motion::motionIncrement(shaken, s.x.segment<3>(7), s.x.segment<3>(10), 2.0, 200);
+    EXPECT_LT((inc.shakeCov - Mat3::Identity() * (0.3 * 0.3 / (200.0 * 200.0) * 2.0)).norm(), 1e-20) << spec;
+    bayes::TGaussian ref{s.x, P0}, G{s.x, P0};
+    MatX scratch;
+    predictRobocentric(ref, s.feats, inc0, scratch);
+    predictRobocentric(G, s.feats, inc, scratch);
+    EXPECT_EQ(G.x, ref.x) << spec;
+    const auto g = [&](const VecX& sv) -> VecX {
+      motion::TMotionIncrement rot;
+      rot.dq = math::quatFromRotationVector(sv);
+      rot.uNext = ref.x.segment<6>(7);
+      bayes::TGaussian R{ref.x, MatX::Zero(n, n)};
+      MatX sc;
+      predictRobocentric(R, s.feats, rot, sc);
+      return R.x;
+    };
+    const MatX B = math::numericalJacobian(g, VecX::Zero(3), 1e-7);
+    const MatX Pexp = ref.P + B * inc.shakeCov * B.transpose();
+    EXPECT_LT((G.P - Pexp).norm(), 1e-6 * P0.norm()) << spec;
+    EXPECT_LT((G.P - G.P.transpose()).norm(), 1e-15) << spec;
+    // The factor the lazy modes use is the same term.
+    const MatX F = shakeFactor(ref, s.feats, inc.shakeCov);
+    EXPECT_LT((F * F.transpose() - B * inc.shakeCov * B.transpose()).norm(), 1e-6 * P0.norm()) << spec;
+  }
+  TIMMBankOptions b;
+  b.models = "stationary:0.4";
+  b.shake_px = 0.3;
+  const auto inc = motion::motionIncrement(b.parseModels()[0], Vec3::Zero(), Vec3::Zero(), 1.0, 200);
+  EXPECT_TRUE(inc.identity);
+  EXPECT_NEAR(inc.noiseCov(5, 5), (0.4 * 0.4 + 0.3 * 0.3) / (200.0 * 200.0), 1e-20);
+  EXPECT_TRUE(inc.shakeCov.isZero());
+}
+
 TEST(StateOps, FeatureInitialisationCovarianceMatchesJacobians)
 {
   // Augmenting (x, P) must equal the first-order transfer through y = g(b(uv), rho), anchored at the
@@ -301,7 +352,7 @@ namespace
 /** One Monte Carlo run of the measurement-level simulation; returns the pose NEES per frame. */
 std::vector<double> simulateRun(unsigned seed, int nFrames, const std::string& models, double rhoStd,
                                 double* rmsPos = nullptr, double dormantBelow = -1, int* nDormant = nullptr,
-                                bool lazy = true)
+                                bool lazy = true, double shakePx = 0)
 {
   const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
   std::mt19937 rng(seed);
@@ -319,6 +370,7 @@ std::vector<double> simulateRun(unsigned seed, int nFrames, const std::string& m
   b.models = models;
   if (dormantBelow >= 0) b.dormant_below = dormantBelow;
   b.lazy_prediction = lazy;
+  b.shake_px = shakePx;
   CMonoSlamIMM slam(o, b, COnePointRansac::TOptions(), cam);
 
   const double f = 200, sv = o.init_linear_velocity_std_px / f, sw = o.init_angular_velocity_std_px / f;
@@ -445,6 +497,65 @@ TEST(IMMSlam, DormantModesKeepTheExactBanksEstimate)
   std::printf("7-model bank, 60 frames: %.2f dormant modes per frame, position RMS %.5f (exact %.5f), "
               "mean pose NEES %.2f (exact %.2f)\n",
               dormant / 60.0, rmsDormant, rmsExact, nb / a.size(), na / a.size());
+}
+
+TEST(IMMSlam, LazyPredictionIsExactWithAShake)
+{
+  // The lazy modes add the shake's factor to every block, column and innovation covariance they give
+  // out (and to P when they are materialized): the same run as the eager prediction.
+  const std::string bank = "stationary rotation:0.1 rotation:0.5 rotation:1 general:0.1 general:0.5 general:1";
+  double rmsLazy = 0, rmsEager = 0;
+  int dLazy = 0, dEager = 0;
+  const auto a = simulateRun(11, 60, bank, 0.05, &rmsLazy, 1e-5, &dLazy, true, 0.15);
+  const auto b = simulateRun(11, 60, bank, 0.05, &rmsEager, 1e-5, &dEager, false, 0.15);
+  EXPECT_GT(dLazy, 60);
+  EXPECT_EQ(dLazy, dEager);
+  EXPECT_NEAR(rmsLazy, rmsEager, 1e-9 * rmsEager);
+  for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k], b[k], 1e-6 * (1 + b[k]));
+}
+
+TEST(IMMSlam, EvidenceEntryForbidsSwitchesIntoTheGeneralModesOnly)
+{
+  // imm.general_entry = evidence: a still or rotating mode (v = 0) never switches into a general one
+  // (whose velocity the mixing would drag towards 0); every other entry is the default matrix's.
+  TIMMBankOptions b;
+  b.models = "stationary rotation:0.1 rotation:0.5 rotation:1 general:0.1 general:0.5 general:1";
+  b.transition_stay = 0.995;
+  const MatX markov = b.transitionMatrix(7);
+  b.general_entry = "evidence";
+  const MatX pi = b.transitionMatrix(7);
+  for (int j = 0; j < 7; ++j)
+  {
+    EXPECT_NEAR(pi.row(j).sum(), 1.0, 1e-15) << "row " << j;
+    for (int i = 0; i < 7; ++i)
+    {
+      EXPECT_GE(pi(j, i), 0.0);
+      if (j < 4 && i >= 4)
+      {
+        EXPECT_EQ(pi(j, i), 0.0) << j << " -> " << i;
+      }
+      else if (i != j)
+      {
+        EXPECT_EQ(pi(j, i), markov(j, i)) << j << " -> " << i;
+      }
+    }
+  }
+  EXPECT_NEAR(pi(0, 0), 1.0 - 3 * (1.0 - 0.995) / 6, 1e-15);
+  EXPECT_EQ(pi(4, 4), markov(4, 4));
+  // An explicit transition_matrix is used as given; a bad value names the key either way.
+  b.transition_matrix.assign(49, 0.0);
+  for (int i = 0; i < 7; ++i) b.transition_matrix[i * 8] = 1.0;
+  EXPECT_TRUE(b.transitionMatrix(7) == MatX::Identity(7, 7));
+  b.general_entry = "sometimes";
+  try
+  {
+    b.transitionMatrix(7);
+    ADD_FAILURE() << "no error";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("[imm] general_entry"), std::string::npos) << e.what();
+  }
 }
 
 TEST(IMMSlam, DroppedFramesGiveTheModesTheTimeToSwitch)

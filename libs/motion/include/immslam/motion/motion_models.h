@@ -44,6 +44,12 @@ struct TMotionModel
   double sigmaAngularPx = 1.0;  ///< angular acceleration noise (rotation, general), pixels; for the
                                 ///< stationary model the std of a zero-mean angular jitter per frame
   std::string name;             ///< CSV column name, begins with the family name
+  /** Std of a zero-mean angular shake of the camera per frame, pixels (a random walk of the
+   * orientation on top of the model's motion, not kept in the angular velocity: hand tremor, vibration).
+   * The same in every model of a bank, so a still camera is the rotation model's special case w = 0
+   * and the stationary model (no velocity to learn) stays the simpler explanation (doc/imm.md). For the
+   * stationary model it adds to sigmaAngularPx, its own jitter. */
+  double shakePx = 0.0;
 
   /** "general_1px", "rotation_0.5px", "stationary" when name is empty. */
   std::string displayName() const;
@@ -75,6 +81,9 @@ struct TMotionIncrement
   bool identity = false;
   Mat36u J_t_n = Mat36u::Zero();   ///< stationary jitter: dt/d(noise)
   Mat46u J_dq_n = Mat46u::Zero();  ///< stationary jitter: d(dq)/d(noise)
+  /** Rotation, general: covariance of the shake, a zero-mean rotation exp(s) of the camera after the
+   * motion (pose and features re-expressed through it, velocities unchanged): shakePx^2 / f^2 dt. */
+  Mat3 shakeCov = Mat3::Zero();
 };
 
 /** The increment of model m over dt frames from the velocities (v, w) in the camera frame. */

@@ -120,6 +120,15 @@ struct TIMMBankOptions : public mrpt::config::CLoadableOptions
   std::vector<double> transition_matrix;
   /** Diagonal of the default Markov matrix; the rest of each row is spread evenly. */
   double transition_stay = 0.995;
+  /** How the default Markov matrix lets a general mode be entered (ignored with transition_matrix):
+   * "markov": from every mode (the rest of each row spread evenly over all the other modes);
+   * "evidence": not from a mode whose linear velocity is fixed at 0 (stationary, rotation): those rows
+   * spread (1 - transition_stay) / (r - 1) over the non-general modes only and keep the remainder on
+   * the diagonal. The general modes then keep their own history (mixing from a mode with v = 0 and
+   * zero variance would pull their velocity, which carries the scale of a monocular map, back to 0
+   * every frame) and take over by the likelihood of the measurements from the probability floor
+   * (doc/imm.md, "Entering the general modes"). */
+  std::string general_entry = "markov";
   /** Initial model probabilities (empty: uniform). */
   std::vector<double> prior;
   /** Lower bound of every model probability (no model dies for ever). */
@@ -142,6 +151,11 @@ struct TIMMBankOptions : public mrpt::config::CLoadableOptions
    * O(n) each, and the O(n^2) covariance prediction runs only if the frame makes it active. Exact: the
    * same numbers as the full prediction, up to rounding. */
   bool lazy_prediction = true;
+  /** Zero-mean angular shake of the camera, px per frame (std of a random walk of the orientation,
+   * shake_px / f sqrt(dt) rad), in every model: after the stationary model's identity, the rotation
+   * and general models' constant-velocity step (motion::TMotionModel::shakePx; doc/imm.md, "Camera
+   * shake"). 0 = none (the paper's models). */
+  double shake_px = 0.0;
 
   void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
   void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
@@ -359,6 +373,7 @@ class CMonoSlamIMM
     bool active = false;
     std::vector<TTransitionBlock> blocks;
     std::vector<int> blockAt;  ///< transition block of each state offset, -1 elsewhere
+    MatX shake;                ///< n x 3 factor of the shake's covariance (shakeFactor), empty if none
   };
   std::vector<TLazyMode> m_lazy;
   /** Per mode: P H^T and the factor of S of the frame's first likelihood, reused by its update. */

@@ -50,6 +50,12 @@ void predictRobocentricMean(bayes::TGaussian& g, const std::vector<TFeature>& fe
 /** P <- A P~ A^T (exactly symmetric), about half of O(n sum_b (s_b^2 + 6 s_b)): only the lower block
  * triangle is computed. \p scratch: an n x 13 work buffer. */
 void applyRobocentricTransition(MatX& P, const std::vector<TTransitionBlock>& blocks, MatX& scratch);
+/** n x 3 factor F, F F^T = B N B^T: the covariance a zero-mean shake of the camera (a rotation exp(s)
+ * after the motion, s ~ N(0, shakeCov), motion::TMotionIncrement::shakeCov) adds to the predicted state g
+ * (pose and features re-expressed through it; the velocities are not changed). */
+MatX shakeFactor(const bayes::TGaussian& g, const std::vector<TFeature>& features, const Mat3& shakeCov);
+/** P <- P + F F^T, exactly symmetric. */
+void addCovarianceFactor(MatX& P, const MatX& F);
 /** Columns of block b of A P~ A^T (n x len_b), without forming it: O(n len_b (len_b + 6)). */
 MatX transitionColumns(const MatX& Pt, const std::vector<TTransitionBlock>& blocks, int b);
 /** Diagonal block of A P~ A^T for one transition block: O(len^2 (len + 6)). */
