@@ -173,7 +173,7 @@ T0=$(date +%s.%N)
 while [[ -n "$APID" ]] && kill -0 "$APID" 2>/dev/null; do
   RSS=$(awk '/^VmRSS:/{print $2}' "/proc/$APID/status" 2>/dev/null || true)
   HWM=$(awk '/^VmHWM:/{print $2}' "/proc/$APID/status" 2>/dev/null || true)
-  NF=$(wc -l < "$MEMDIR/trajectory.txt" 2>/dev/null || echo 0)
+  NF=$(wc -l 2>/dev/null < "$MEMDIR/trajectory.txt" || echo 0)
   [[ -n "$RSS" ]] && echo "$(awk -v a="$(date +%s.%N)" -v b="$T0" 'BEGIN{printf "%.2f", a - b}'),$RSS,$HWM,$NF" >> "$OUT/rss.csv"
   sleep 0.5
 done

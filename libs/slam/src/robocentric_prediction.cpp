@@ -52,10 +52,7 @@ void columnBlock(const TBlockJac& b, const std::vector<TBlockJac>& blocks, const
     Pc.noalias() += Mu.bottomRows(h).lazyProduct(Gt);
   }
 }
-}  // namespace
 
-namespace
-{
 /** n x 6 factor L with L L^T = B N B^T, B = df/dn: a zero-mean jitter n of the camera (covariance N),
  * applied at the identity increment to the state g (the world pose and every feature are
  * re-expressed through the jitter rotation). */
@@ -63,8 +60,6 @@ MatX cameraJitterFactor(const bayes::TGaussian& g, const std::vector<TFeature>& 
                         const motion::Mat36u& J_t_n, const motion::Mat46u& J_dq_n)
 {
   const Eigen::Index n = g.x.size();
-  // Zero-mean jitter n of the camera: P += B N B^T with B = df/dn at the identity increment
-  // (the world pose and every feature are re-expressed through the jitter rotation).
   MatX B = MatX::Zero(n, 6);
   const Vec3 t0 = Vec3::Zero();
   const Vec4 dq0(1, 0, 0, 0);
