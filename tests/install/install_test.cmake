@@ -7,7 +7,7 @@ function(run)
   set(OUT "${out}" PARENT_SCOPE)
 endfunction()
 run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${PREFIX})
-foreach(f bin/imm-monoslam bin/dataset2rawlog bin/imm-render share/imm-monoslam/ini/imm7-shadow.ini
+foreach(f bin/imm-monoslam bin/dataset2rawlog bin/imm-render bin/imm-composite share/imm-monoslam/ini/imm7-shadow.ini
           share/doc/imm-monoslam/usage.md lib/cmake/immslam/immslamConfig.cmake include/immslam/slam/CMonoSlamIMM.h)
   if(NOT EXISTS ${PREFIX}/${f})
     message(FATAL_ERROR "not installed: ${f}")

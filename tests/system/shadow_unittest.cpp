@@ -1,11 +1,14 @@
 /* MonoSLAMBOT (paper 2) at system level: static/dynamic classification against ground truth, and the
- * map kept clean of moving objects (Fig. 5 as numbers). */
+ * map kept clean of moving objects (Fig. 5 as numbers), on rendered scenes and on real video with
+ * pasted moving objects. */
 #include "test_helpers.h"
 
+#include <immslam/eval/ate.h>
 #include <immslam/eval/classification_truth.h>
 #include <immslam/sim/CSimulator.h>
 #include <immslam/sim/CSyntheticSource.h>
 #include <immslam/sim/TScenario.h>
+#include <immslam/sim/composite.h>
 
 #include <cmath>
 #include <optional>
@@ -116,4 +119,76 @@ TEST(ShadowSystem, MovingObjectsOverFiveSeeds)
               100 * sumStill / n, 100 * sumMoving / n, sumMoving / sumStill);
   EXPECT_LE(sumMoving / n, 0.01);
   EXPECT_LE(sumMoving / sumStill, 1.6);  // measured 1.47 (the paper's claim, <= 1.2, is not met: doc/shadow.md)
+}
+
+TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
+{
+  // Real camera motion, background, noise and blur; moving objects cut from another real sequence
+  // pasted in with imm-composite, their masks the truth (share/scripts/composite-real.sh, doc/shadow.md).
+  if (!haveSharedData("monoslam_testseq") || !haveSharedData("visp_rbt"))
+    GTEST_SKIP() << "../shared/data/monoslam_testseq or visp_rbt is absent";
+  const auto composite = [](const std::string& src, const std::string& name, const std::vector<sim::TCompositeObject>& objs) {
+    const auto folder = outDir(name);
+    const sim::TCompositeStats st = sim::compositeMovingObjects(sharedData(src), folder, objs);
+    EXPECT_GT(st.objectFrames, 0u);
+    return folder;
+  };
+  const auto object = [](const std::string& image, int x, int y, int w, int h, double s0, double s1, Vec2 from, Vec2 to,
+                         std::size_t first, std::size_t last, double amp, double period) {
+    sim::TCompositeObject o;
+    o.image = image;
+    o.cropX = x, o.cropY = y, o.cropW = w, o.cropH = h;
+    o.scaleFirst = s0, o.scaleLast = s1;
+    o.from = from, o.to = to;
+    o.firstFrame = first, o.lastFrame = last;
+    o.waveAmplitudePx = amp, o.wavePeriodFrames = period;
+    return o;
+  };
+  const auto run = [](const std::string& cfg, const std::string& input, const std::string& name, app::TRunSummary* s) {
+    const auto out = outDir(name);
+    EXPECT_EQ(runApp({sourceDir() + "/ini/" + cfg, input, "--out", out, "--set", "output.plots=false"}, s), 0);
+    return out;
+  };
+  const auto decisions = [](const std::string& out, const std::string& folder) {
+    return eval::classificationAgainstMaskFolder(eval::readClassificationsCsv(out + "/classifications.csv"), folder, 1)
+        .confusion;
+  };
+
+  // monoslam_testseq (no ground truth): two passes of a large cut-out (20 % of the image on average,
+  // up to 43 %); the reference is the full system's run on the clean sequence.
+  const std::string visp = sharedData("visp_rbt") + "/rgb/color_image_0050.png";
+  const auto ts = composite("monoslam_testseq", "composite_ts",
+                            {object(visp, 170, 140, 400, 280, 0.45, 0.45, Vec2(-100, 120), Vec2(420, 120), 100, 400, 30, 60),
+                             object(visp, 170, 140, 400, 280, 0.5, 0.7, Vec2(420, 100), Vec2(-100, 140), 600, 900, 30, 60)});
+  app::TRunSummary clean, full;
+  const auto outClean = run("imm7-shadow.ini", sharedData("monoslam_testseq"), "composite_ts_clean", &clean);
+  const auto outFull = run("imm7-shadow.ini", ts, "composite_ts_full", &full);
+  const eval::TTrajectory ref = eval::readTumTrajectory(outClean + "/trajectory.txt");
+  const eval::TTrajectory est = eval::readTumTrajectory(outFull + "/trajectory.txt");
+  ASSERT_EQ(est.size(), 1000u);
+  const double deviation = eval::computeAte(est, ref).rmseOverPath;
+  const eval::TConfusionMatrix c = decisions(outFull, ts);
+  std::printf("testseq + pasted objects, full system: deviation from the clean run %.3f %% of path; moving->static "
+              "%zu/%zu, static->dynamic %zu/%zu\n",
+              100 * deviation, c.dynamicAsStatic, c.trulyDynamic(), c.staticAsDynamic, c.trulyStatic());
+  EXPECT_LE(deviation, 0.005);  // measured 0.14 %; the IMM without shadow filter 2.4 %, the single model 1.9 %
+  EXPECT_GE(c.trulyDynamic(), 20u);
+  EXPECT_EQ(c.dynamicAsStatic, 0u);
+
+  // visp_rbt (AprilTag ground truth): a desk cut-out crossing the whole image (13 % on average).
+  const std::string desk = sharedData("monoslam_testseq") + "/rgb/000500.png";
+  const auto vi = composite("visp_rbt", "composite_visp",
+                            {object(desk, 0, 0, 320, 240, 1, 1, Vec2(-160, 240), Vec2(800, 240), 0, 98, 30, 50)});
+  app::TRunSummary viClean, viFull;
+  run("imm7-shadow.ini", sharedData("visp_rbt"), "composite_visp_clean", &viClean);
+  const auto viOut = run("imm7-shadow.ini", vi, "composite_visp_full", &viFull);
+  ASSERT_TRUE(viClean.ate && viFull.ate);
+  const eval::TConfusionMatrix cv = decisions(viOut, vi);
+  std::printf("visp_rbt + pasted object, full system: ATE %.3f %% of path vs %.3f %% on the clean sequence; "
+              "moving->static %zu/%zu, static->dynamic %zu/%zu\n",
+              100 * viFull.ate->rmseOverPath, 100 * viClean.ate->rmseOverPath, cv.dynamicAsStatic, cv.trulyDynamic(),
+              cv.staticAsDynamic, cv.trulyStatic());
+  EXPECT_LE(viFull.ate->rmseOverPath, 1.2 * viClean.ate->rmseOverPath);  // measured 1.86 vs 1.96 %
+  EXPECT_GE(cv.trulyDynamic(), 10u);
+  EXPECT_EQ(cv.dynamicAsStatic, 0u);
 }

@@ -5,6 +5,7 @@
 #include <immslam/math/quaternion.h>
 #include <immslam/sim/CSimulator.h>
 #include <immslam/sim/CSyntheticSource.h>
+#include <immslam/sim/composite.h>
 #include <immslam/sim/pixel_truth.h>
 #include <immslam/sim/render_app.h>
 
@@ -766,6 +767,148 @@ TEST(SimOutput, SyntheticSourceStreamsTheScenario)
   }
   EXPECT_TRUE(identical(src.mask(1), sim.renderMask(1)));
   EXPECT_EQ(src.next(f, why), io::ENextStatus::End);
+}
+
+TEST(SimComposite, PastedObjectFollowsItsPathAndTheMaskIsItsTruth)
+{
+  TTempDir src("composite_src"), dst("composite_dst");
+  std::ostringstream out, err;
+  ASSERT_EQ(runRenderApp({scenarioPath("default"), src.path.string(), "--frames", "8", "--set", "render.noise_sigma_grey=0"}, out, err), 0)
+      << err.str();
+  // A texture whose every pixel is known: a horizontal ramp.
+  cv::Mat tex(30, 40, CV_8UC1);
+  for (int y = 0; y < tex.rows; ++y)
+    for (int x = 0; x < tex.cols; ++x) tex.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(40 + 5 * x);
+  const std::string texPath = (src.path / "texture.png").string();
+  ASSERT_TRUE(cv::imwrite(texPath, tex));
+
+  TCompositeObject o;
+  o.image = texPath;
+  o.from = Vec2(20, 50);
+  o.to = Vec2(140, 70);
+  o.firstFrame = 2;
+  o.lastFrame = 6;
+  o.scaleFirst = o.scaleLast = 1.0;
+  const TCompositeStats st = compositeMovingObjects(src.path.string(), dst.path.string(), {o});
+  EXPECT_EQ(st.frames, 8u);
+  EXPECT_EQ(st.skipped, 0u);
+  EXPECT_EQ(st.objectFrames, 5u);
+  const auto rgbIn = dataLines(src.path / "rgb.txt"), rgbOut = dataLines(dst.path / "rgb.txt");
+  ASSERT_EQ(rgbOut.size(), 8u);
+  for (const char* f : {"calib.txt", "groundtruth.txt"})
+  {
+    std::ifstream a(src.path / f), b(dst.path / f);
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(a), {}), std::string(std::istreambuf_iterator<char>(b), {})) << f;
+  }
+  const auto centres = dataLines(dst.path / "objects.txt");
+  ASSERT_EQ(centres.size(), 5u);
+  for (std::size_t k = 0; k < 8; ++k)
+  {
+    std::istringstream a(rgbIn[k]), b(rgbOut[k]);
+    double ta, tb;
+    std::string ra, rb;
+    a >> ta >> ra;
+    b >> tb >> rb;
+    EXPECT_NEAR(ta, tb, 1e-6);
+    const cv::Mat in = cv::imread((src.path / ra).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat img = cv::imread((dst.path / rb).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat mask = cv::imread((dst.path / "masks" / fs::path(rb).filename()).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(img.type(), CV_8UC1) << "a grey source gives grey frames";
+    ASSERT_EQ(mask.type(), CV_8UC1);
+    if (k < 2 || k > 6)
+    {
+      EXPECT_TRUE(identical(img, in)) << "frame " << k << " has no object";
+      EXPECT_EQ(cv::countNonZero(mask), 0);
+      continue;
+    }
+    // The centre moves linearly from `from` to `to` over the span.
+    std::istringstream c(centres[k - 2]);
+    double ts, u, v, scale;
+    int id;
+    c >> ts >> id >> u >> v >> scale;
+    EXPECT_NEAR(ts, ta, 1e-6);
+    EXPECT_EQ(id, 1);
+    const Vec2 expected = o.from + (static_cast<double>(k) - 2.0) / 4.0 * (o.to - o.from);
+    EXPECT_NEAR(u, expected.x(), 1e-3);
+    EXPECT_NEAR(v, expected.y(), 1e-3);
+    // The mask is the ellipse inscribed in the 40x30 crop (area pi 20 15), object id 1.
+    EXPECT_NEAR(cv::countNonZero(mask), M_PI * 20 * 15, 0.04 * M_PI * 20 * 15);
+    double maxVal = 0;
+    cv::minMaxLoc(mask, nullptr, &maxVal);
+    EXPECT_EQ(maxVal, 1.0);
+    for (int y = 0; y < img.rows; ++y)
+      for (int x = 0; x < img.cols; ++x)
+      {
+        const double dx = (x - u) / 20.0, dy = (y - v) / 15.0, r = std::sqrt(dx * dx + dy * dy);
+        if (r < 0.8)  // well inside: the texture pixel at (x, y) - centre + (w-1)/2, bilinear on a ramp
+        {
+          const double tx = x - u + 19.5;
+          EXPECT_NEAR(img.at<std::uint8_t>(y, x), 40 + 5 * tx, 1.01) << "frame " << k << " (" << x << "," << y << ")";
+          EXPECT_EQ(mask.at<std::uint8_t>(y, x), 1);
+        }
+        else if (r > 1.2)  // well outside: the source untouched
+        {
+          EXPECT_EQ(img.at<std::uint8_t>(y, x), in.at<std::uint8_t>(y, x));
+          EXPECT_EQ(mask.at<std::uint8_t>(y, x), 0);
+        }
+      }
+  }
+}
+
+TEST(SimComposite, CommandLineAndBadInputNameTheProblem)
+{
+  TTempDir src("composite_cli_src"), dst("composite_cli_dst");
+  std::ostringstream o0, e0;
+  ASSERT_EQ(runRenderApp({scenarioPath("default"), src.path.string(), "--frames", "3"}, o0, e0), 0) << e0.str();
+  const std::string texPath = (src.path / "texture.png").string();
+  ASSERT_TRUE(cv::imwrite(texPath, cv::Mat(20, 20, CV_8UC3, cv::Scalar(10, 200, 90))));
+  const std::string s = src.path.string(), d = dst.path.string();
+
+  std::ostringstream out, err;
+  EXPECT_EQ(runCompositeApp({s, d, "--object", texPath, "--crop", "2,2,16,16", "--scale", "1,2", "--path", "0,60,159,60",
+                             "--span", "0,2", "--wave", "5,10"},
+                            out, err),
+            0)
+      << err.str();
+  EXPECT_NE(out.str().find("wrote 3 frames"), std::string::npos) << out.str();
+  EXPECT_EQ(cv::imread((dst.path / "rgb" / "000001.png").string(), cv::IMREAD_UNCHANGED).type(), CV_8UC1);
+  // A corrupt source frame is skipped and counted; the others are written.
+  {
+    std::ofstream bad(src.path / "rgb" / "000001.png", std::ios::trunc);
+    bad << "not a png";
+  }
+  TTempDir dst2("composite_cli_dst2");
+  std::ostringstream o1, e1;
+  EXPECT_EQ(runCompositeApp({s, dst2.path.string(), "--object", texPath}, o1, e1), 0) << e1.str();
+  EXPECT_NE(o1.str().find("wrote 2 frames"), std::string::npos) << o1.str();
+  EXPECT_NE(o1.str().find("1 unreadable source frames skipped"), std::string::npos) << o1.str();
+
+  const auto code = [&](const std::vector<std::string>& args, std::string& message) {
+    std::ostringstream o, e;
+    const int rc = runCompositeApp(args, o, e);
+    message = e.str();
+    return rc;
+  };
+  std::string m;
+  EXPECT_EQ(code({"--help"}, m), 0);
+  EXPECT_EQ(code({s, d}, m), 2);
+  EXPECT_NE(m.find("--object"), std::string::npos) << m;
+  EXPECT_EQ(code({s, d, "--crop", "1,1,4,4"}, m), 2);
+  EXPECT_EQ(code({s, d, "--object", texPath, "--crop", "1,1,4"}, m), 2);
+  EXPECT_NE(m.find("--crop"), std::string::npos) << m;
+  EXPECT_EQ(code({s, d, "--object", texPath, "--scale", "0"}, m), 2);
+  EXPECT_EQ(code({s, d, "--object", texPath, "--span", "5,2"}, m), 2);
+  EXPECT_EQ(code({s, d, "--object", texPath, "--wave", "3,0"}, m), 2);
+  EXPECT_EQ(code({s, d, "--object", texPath, "--bogus", "1"}, m), 2);
+  EXPECT_EQ(code({s, d, "--object", texPath, "--crop", "10,10,16,16"}, m), 1);
+  EXPECT_NE(m.find("texture.png"), std::string::npos) << m;
+  EXPECT_NE(m.find("not inside"), std::string::npos) << m;
+  EXPECT_EQ(code({s, d, "--object", "/nonexistent/hand.png"}, m), 1);
+  EXPECT_NE(m.find("/nonexistent/hand.png"), std::string::npos) << m;
+  EXPECT_EQ(code({"/nonexistent/folder", d, "--object", texPath}, m), 1);
+  EXPECT_NE(m.find("/nonexistent/folder"), std::string::npos) << m;
+  EXPECT_EQ(code({s, s, "--object", texPath}, m), 1);
+  EXPECT_NE(m.find("is the source folder"), std::string::npos) << m;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,0 +1,321 @@
+/* imm-monoslam — imm-composite (see composite.h). */
+#include <immslam/io/CDatasetFolderSource.h>
+#include <immslam/io/CDatasetWriter.h>
+#include <immslam/sim/composite.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <ostream>
+#include <sstream>
+#include <stdexcept>
+
+namespace fs = std::filesystem;
+
+namespace immslam::sim
+{
+namespace
+{
+/** A prepared object: texture (the frame's channel count, float) and its feathered elliptical
+ * alpha, both at texture resolution. */
+struct TPrepared
+{
+  cv::Mat texture;  ///< CV_32FC1 or CV_32FC3
+  cv::Mat alpha;    ///< CV_32FC1 in [0, 1]
+};
+
+void validate(const TCompositeObject& o, std::size_t k)
+{
+  const std::string what = "object " + std::to_string(k + 1) + " (" + o.image + "): ";
+  if (!(o.scaleFirst > 0) || !(o.scaleLast > 0)) throw std::invalid_argument(what + "scale must be > 0");
+  if (!(o.wavePeriodFrames > 0)) throw std::invalid_argument(what + "wave period must be > 0 frames");
+  if (!std::isfinite(o.waveAmplitudePx)) throw std::invalid_argument(what + "wave amplitude must be finite");
+  if (o.firstFrame > o.lastFrame) throw std::invalid_argument(what + "span first frame after its last");
+  if (o.cropX < 0 || o.cropY < 0 || o.cropW < 0 || o.cropH < 0)
+    throw std::invalid_argument(what + "crop values must be >= 0");
+  if (o.from.allFinite() != o.to.allFinite())
+    throw std::invalid_argument(what + "give both ends of the path or neither");
+}
+
+TPrepared prepare(const TCompositeObject& o, std::size_t k, int channels)
+{
+  const cv::Mat img = cv::imread(o.image, channels == 1 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
+  if (img.empty()) throw std::runtime_error("cannot read texture image '" + o.image + "'");
+  const int w = o.cropW > 0 ? o.cropW : img.cols - o.cropX, h = o.cropH > 0 ? o.cropH : img.rows - o.cropY;
+  if (w < 4 || h < 4 || o.cropX + w > img.cols || o.cropY + h > img.rows)
+    throw std::invalid_argument("object " + std::to_string(k + 1) + ": crop " + std::to_string(o.cropX) + "," +
+                                std::to_string(o.cropY) + "," + std::to_string(w) + "," + std::to_string(h) +
+                                " is not inside '" + o.image + "' (" + std::to_string(img.cols) + "x" +
+                                std::to_string(img.rows) + ", at least 4x4 px)");
+  TPrepared p;
+  img(cv::Rect(o.cropX, o.cropY, w, h)).convertTo(p.texture, channels == 1 ? CV_32FC1 : CV_32FC3);
+  // Elliptical silhouette inscribed in the crop, edge feathered over ~1.5 texture pixels centred on
+  // the ellipse (a real object's edge is blurred by the optics, not a hard step; alpha 0.5 on it).
+  p.alpha.create(h, w, CV_32FC1);
+  const double a = 0.5 * w, b = 0.5 * h, feather = 1.5;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+    {
+      const double dx = (x + 0.5 - a) / a, dy = (y + 0.5 - b) / b;
+      const double r = std::sqrt(dx * dx + dy * dy);  // 1 on the ellipse
+      p.alpha.at<float>(y, x) = static_cast<float>(std::clamp(0.5 + (1.0 - r) * std::min(a, b) / feather, 0.0, 1.0));
+    }
+  return p;
+}
+
+/** Centre pixel and scale of object o at output frame i (i inside its span). */
+void placement(const TCompositeObject& o, std::size_t i, std::size_t last, const cv::Size& image, Vec2& centre,
+               double& scale)
+{
+  const double span = static_cast<double>(last - o.firstFrame);
+  const double s = span > 0 ? static_cast<double>(i - o.firstFrame) / span : 0.0;
+  Vec2 from = o.from, to = o.to;
+  if (!from.allFinite())
+  {
+    from = Vec2(0.0, 0.5 * (image.height - 1));
+    to = Vec2(image.width - 1.0, from.y());
+  }
+  const Vec2 d = to - from;
+  const Vec2 n = d.norm() > 0 ? Vec2(-d.y() / d.norm(), d.x() / d.norm()) : Vec2(0, 1);
+  const double phase = 2 * M_PI * static_cast<double>(i - o.firstFrame) / o.wavePeriodFrames;
+  centre = from + s * d + o.waveAmplitudePx * std::sin(phase) * n;
+  scale = o.scaleFirst + s * (o.scaleLast - o.scaleFirst);
+}
+}  // namespace
+
+TCompositeStats compositeMovingObjects(const std::string& sourceFolder, const std::string& outFolder,
+                                       const std::vector<TCompositeObject>& objects)
+{
+  if (objects.empty()) throw std::invalid_argument("no object to paste");
+  if (objects.size() > 255) throw std::invalid_argument("at most 255 objects (8-bit masks)");
+  for (std::size_t k = 0; k < objects.size(); ++k) validate(objects[k], k);
+  std::error_code same;
+  if (fs::equivalent(fs::path(sourceFolder), fs::path(outFolder), same))
+    throw std::invalid_argument("the output folder '" + outFolder + "' is the source folder");
+
+  io::CDatasetFolderSource src(sourceFolder);
+  if (!src.calibration()) throw std::runtime_error(sourceFolder + ": no calib.txt (a composite needs the camera)");
+  const std::size_t nEntries = src.sizeHint();
+
+  io::CDatasetWriter writer(outFolder, *src.calibration(),
+                            "composite of " + sourceFolder + " with " + std::to_string(objects.size()) +
+                                " pasted moving object(s) (imm-composite; masks/ and objects.txt are the truth)");
+  const fs::path out(outFolder);
+  std::error_code ec;
+  fs::create_directories(out / "masks", ec);
+  if (ec) throw std::runtime_error("cannot create " + (out / "masks").string() + ": " + ec.message());
+  const std::string objectsTxt = (out / "objects.txt").string();
+  std::ofstream objFile(objectsTxt, std::ios::trunc);
+  if (!objFile) throw std::runtime_error("cannot write " + objectsTxt);
+  objFile << "# pasted objects (imm-composite " << sourceFolder << "): centre pixel and scale per frame\n"
+          << "# timestamp object_id u v scale\n";
+
+  std::vector<TPrepared> prepared;
+  int channels = 0;
+  TCompositeStats st;
+  io::TFrame f;
+  std::string why;
+  for (;;)
+  {
+    const io::ENextStatus status = src.next(f, why);
+    if (status == io::ENextStatus::End) break;
+    if (status == io::ENextStatus::Skipped)
+    {
+      ++st.skipped;
+      continue;
+    }
+    cv::Mat frame = f.colour.empty() ? f.grey.clone() : f.colour.clone();
+    if (prepared.empty())
+    {
+      channels = frame.channels();
+      for (std::size_t k = 0; k < objects.size(); ++k) prepared.push_back(prepare(objects[k], k, channels));
+    }
+    if (frame.channels() != channels)  // a grey frame in a colour sequence or the reverse
+      cv::cvtColor(frame, frame, channels == 1 ? cv::COLOR_BGR2GRAY : cv::COLOR_GRAY2BGR);
+
+    const std::size_t i = st.frames;
+    cv::Mat mask = cv::Mat::zeros(frame.size(), CV_8UC1);
+    cv::Mat img;
+    frame.convertTo(img, channels == 1 ? CV_32FC1 : CV_32FC3);
+    bool any = false;
+    for (std::size_t k = 0; k < objects.size(); ++k)
+    {
+      const TCompositeObject& o = objects[k];
+      const std::size_t last = std::min(o.lastFrame, nEntries > 0 ? nEntries - 1 : o.lastFrame);
+      if (i < o.firstFrame || i > last) continue;
+      Vec2 c;
+      double s = 1;
+      placement(o, i, last, frame.size(), c, s);
+      const TPrepared& p = prepared[k];
+      // Texture pixel (x, y) (centres at integers) goes to image pixel s (x - (w-1)/2) + c.
+      const cv::Matx23d A(s, 0, c.x() - s * 0.5 * (p.texture.cols - 1), 0, s, c.y() - s * 0.5 * (p.texture.rows - 1));
+      cv::Mat tex, alpha;
+      cv::warpAffine(p.texture, tex, A, frame.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+      cv::warpAffine(p.alpha, alpha, A, frame.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+      cv::Mat alphaN;
+      if (channels == 1)
+        alphaN = alpha;
+      else
+        cv::merge(std::vector<cv::Mat>{alpha, alpha, alpha}, alphaN);
+      cv::Mat keep;
+      cv::subtract(cv::Scalar::all(1.0), alphaN, keep);
+      img = img.mul(keep) + tex.mul(alphaN);
+      cv::Mat covered = alpha >= 0.5f;
+      mask.setTo(static_cast<int>(k + 1), covered);
+      if (cv::countNonZero(covered) > 0) any = true;
+      char line[160];
+      std::snprintf(line, sizeof(line), "%.6f %zu %.3f %.3f %.5f\n", f.timestamp, k + 1, c.x(), c.y(), s);
+      objFile << line;
+    }
+    img.convertTo(frame, channels == 1 ? CV_8UC1 : CV_8UC3);  // rounds and saturates
+    const std::string rel = writer.addFrame(f.timestamp, frame);
+    const std::string maskPath = (out / "masks" / fs::path(rel).filename()).string();
+    if (!cv::imwrite(maskPath, mask)) throw std::runtime_error("cannot write '" + maskPath + "'");
+    if (any)
+    {
+      const double cov = static_cast<double>(cv::countNonZero(mask)) / static_cast<double>(mask.total());
+      ++st.objectFrames;
+      st.meanCoverage += cov;
+      st.maxCoverage = std::max(st.maxCoverage, cov);
+    }
+    ++st.frames;
+  }
+  writer.close();
+  if (!objFile.flush()) throw std::runtime_error("write error in " + objectsTxt);
+  if (st.objectFrames > 0) st.meanCoverage /= static_cast<double>(st.objectFrames);
+  // The source's own calibration and ground truth, byte for byte (timestamps are unchanged).
+  for (const char* name : {"calib.txt", "groundtruth.txt"})
+  {
+    const fs::path from = fs::path(sourceFolder) / name;
+    if (fs::exists(from)) fs::copy_file(from, out / name, fs::copy_options::overwrite_existing);
+  }
+  return st;
+}
+
+std::string compositeAppUsage()
+{
+  return "Usage: imm-composite SOURCE_FOLDER OUT_FOLDER --object IMAGE [object options] [--object IMAGE ...]\n"
+         "Pastes moving objects cut from real images into a dataset folder (a real camera's sequence) and\n"
+         "writes the result with the truth: rgb/ rgb.txt calib.txt [groundtruth.txt] masks/ (0 static\n"
+         "world, k moving object k) objects.txt (centre pixel and scale per frame).\n"
+         "Object options (apply to the last --object):\n"
+         "  --crop X,Y,W,H          part of IMAGE to use (default: all); the object is the ellipse inscribed in it\n"
+         "  --scale S | S0,S1       texture-to-image scale, constant or changing linearly over the span\n"
+         "  --path U0,V0,U1,V1      centre pixel at the first and last frame of the span (default: left\n"
+         "                          edge to right edge at mid-height)\n"
+         "  --span A,B              first and last output frame (0-based) the object is in (default: all)\n"
+         "  --wave AMP,PERIOD       sinusoidal offset perpendicular to the path, pixels and frames\n"
+         "  --help                  this text\n"
+         "Exit status: 0 success, 1 bad input or failure, 2 bad usage.\n";
+}
+
+namespace
+{
+/** Parses exactly n comma-separated numbers; false on anything else. */
+bool parseNumbers(const std::string& s, std::size_t n, std::vector<double>& v)
+{
+  v.clear();
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ','))
+  {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0' || !std::isfinite(x)) return false;
+    v.push_back(x);
+  }
+  return v.size() == n;
+}
+}  // namespace
+
+int runCompositeApp(const std::vector<std::string>& args, std::ostream& out, std::ostream& err)
+{
+  std::vector<std::string> positional;
+  std::vector<TCompositeObject> objects;
+  const auto usageError = [&](const std::string& msg) {
+    err << "imm-composite: " << msg << "\n" << compositeAppUsage();
+    return 2;
+  };
+  for (std::size_t i = 0; i < args.size(); ++i)
+  {
+    const std::string& a = args[i];
+    if (a == "--help" || a == "-h")
+    {
+      out << compositeAppUsage();
+      return 0;
+    }
+    if (a.size() < 2 || a[0] != '-')
+    {
+      positional.push_back(a);
+      continue;
+    }
+    if (i + 1 >= args.size()) return usageError(a + " needs a value");
+    const std::string v = args[++i];
+    if (a == "--object")
+    {
+      objects.emplace_back();
+      objects.back().image = v;
+      continue;
+    }
+    if (objects.empty()) return usageError(a + " before any --object");
+    TCompositeObject& o = objects.back();
+    std::vector<double> x;
+    if (a == "--crop")
+    {
+      if (!parseNumbers(v, 4, x) || std::any_of(x.begin(), x.end(), [](double t) { return t < 0 || t != std::floor(t); }))
+        return usageError("--crop needs X,Y,W,H (integers >= 0), got '" + v + "'");
+      o.cropX = static_cast<int>(x[0]), o.cropY = static_cast<int>(x[1]);
+      o.cropW = static_cast<int>(x[2]), o.cropH = static_cast<int>(x[3]);
+    }
+    else if (a == "--scale")
+    {
+      if (parseNumbers(v, 1, x))
+        o.scaleFirst = o.scaleLast = x[0];
+      else if (parseNumbers(v, 2, x))
+        o.scaleFirst = x[0], o.scaleLast = x[1];
+      else
+        return usageError("--scale needs S or S0,S1, got '" + v + "'");
+      if (!(o.scaleFirst > 0 && o.scaleLast > 0)) return usageError("--scale must be > 0, got '" + v + "'");
+    }
+    else if (a == "--path")
+    {
+      if (!parseNumbers(v, 4, x)) return usageError("--path needs U0,V0,U1,V1, got '" + v + "'");
+      o.from = Vec2(x[0], x[1]), o.to = Vec2(x[2], x[3]);
+    }
+    else if (a == "--span")
+    {
+      if (!parseNumbers(v, 2, x) || x[0] < 0 || x[1] < x[0] || x[0] != std::floor(x[0]) || x[1] != std::floor(x[1]))
+        return usageError("--span needs A,B (integers, 0 <= A <= B), got '" + v + "'");
+      o.firstFrame = static_cast<std::size_t>(x[0]), o.lastFrame = static_cast<std::size_t>(x[1]);
+    }
+    else if (a == "--wave")
+    {
+      if (!parseNumbers(v, 2, x) || !(x[1] > 0)) return usageError("--wave needs AMP,PERIOD (period > 0), got '" + v + "'");
+      o.waveAmplitudePx = x[0], o.wavePeriodFrames = x[1];
+    }
+    else
+      return usageError("unknown option '" + a + "'");
+  }
+  if (positional.size() != 2) return usageError("expected SOURCE_FOLDER and OUT_FOLDER");
+  if (objects.empty()) return usageError("give at least one --object IMAGE");
+  try
+  {
+    const TCompositeStats s = compositeMovingObjects(positional[0], positional[1], objects);
+    out << "imm-composite: wrote " << s.frames << " frames to " << positional[1] << " (" << s.skipped
+        << " unreadable source frames skipped); objects in " << s.objectFrames << " frames, covering "
+        << 100.0 * s.meanCoverage << " % of the image on average, " << 100.0 * s.maxCoverage << " % at most\n";
+    return 0;
+  }
+  catch (const std::exception& e)
+  {
+    err << "imm-composite: error: " << e.what() << "\n";
+    return 1;
+  }
+}
+}  // namespace immslam::sim
