@@ -74,3 +74,30 @@ for seq in ts-small ts-large vi-1 vi-2 vi-3 vi-4; do
   done
   printf '%-10s %s\n' "$seq" "full system decisions: $(rates "$OUT/$seq-imm7-shadow" "$OUT/$seq")"
 done
+
+# Single composites are fragile: five small variations of ts-large (object scale, wave amplitude and
+# period) and of vi-4 (scale, wave amplitude), the full system and the IMM without shadow filter
+# (the variations of ShadowSystem.RealVideoWithPastedMovingObjects).
+echo
+echo "== variations: ts-large (deviation) and vi-4 (ATE), % of path =="
+for v in "0.45 30 60" "0.44 30 60" "0.46 30 60" "0.45 28 60" "0.45 30 56"; do
+  set -- $v
+  "$BIN/imm-composite" "$DATA/monoslam_testseq" "$OUT/var-ts" --object "$VISP_OBJ" --crop 170,140,400,280 --scale "$1" \
+      --path -100,120,420,120 --span 100,400 --wave "$2,$3" \
+    --object "$VISP_OBJ" --crop 170,140,400,280 --scale 0.5,0.7 --path 420,100,-100,140 --span 600,900 --wave "$2,$3" > /dev/null
+  run ini/imm7-shadow.ini "$OUT/var-ts" "$OUT/var-ts-full"
+  run ini/imm7.ini "$OUT/var-ts" "$OUT/var-ts-imm7"
+  printf 'ts-large scale %s wave %s,%s: full %s  imm7 %s  (%s)\n' "$1" "$2" "$3" \
+    "$(ate "$OUT/var-ts-full/trajectory.txt" "$OUT/ts-clean-full/trajectory.txt")" \
+    "$(ate "$OUT/var-ts-imm7/trajectory.txt" "$OUT/ts-clean-full/trajectory.txt")" "$(rates "$OUT/var-ts-full" "$OUT/var-ts")"
+done
+for v in "1.0 30" "0.98 30" "1.02 30" "1.0 29" "1.0 31"; do
+  set -- $v
+  "$BIN/imm-composite" "$DATA/visp_rbt" "$OUT/var-vi" --object "$TS_OBJ" --crop 0,0,320,240 --scale "$1" \
+    --path -160,240,800,240 --span 0,98 --wave "$2,50" > /dev/null
+  run ini/imm7-shadow.ini "$OUT/var-vi" "$OUT/var-vi-full"
+  run ini/imm7.ini "$OUT/var-vi" "$OUT/var-vi-imm7"
+  printf 'vi-4 scale %s wave %s,50: full %s  imm7 %s  (%s)\n' "$1" "$2" \
+    "$(ate "$OUT/var-vi-full/trajectory.txt" "$DATA/visp_rbt/groundtruth.txt")" \
+    "$(ate "$OUT/var-vi-imm7/trajectory.txt" "$DATA/visp_rbt/groundtruth.txt")" "$(rates "$OUT/var-vi-full" "$OUT/var-vi")"
+done
