@@ -13,6 +13,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <filesystem>
+#include <numeric>
 #include <optional>
 
 using namespace immslam;
@@ -129,7 +131,8 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
   // pasted in with imm-composite, their masks the truth (share/scripts/composite-real.sh, doc/shadow.md).
   // Single runs of one composite are fragile (a 2 % change of the object's size can turn a 0.1 %
   // deviation into 2 %), so each sequence is tested over five small variations of the object's path
-  // and size: pooled decisions and median errors.
+  // and size: pooled decisions, mean (testseq, against the IMM without shadow filter on the same
+  // composites) and median (visp_rbt, against the clean run) errors.
   if (!haveSharedData("monoslam_testseq") || !haveSharedData("visp_rbt"))
     GTEST_SKIP() << "../shared/data/monoslam_testseq or visp_rbt is absent";
   const auto object = [](const std::string& image, int x, int y, int w, int h, double s0, double s1, Vec2 from, Vec2 to,
@@ -143,17 +146,25 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
     o.waveAmplitudePx = amp, o.wavePeriodFrames = period;
     return o;
   };
-  // Runs the full system on a composite; returns its output folder and adds its decisions to c.
-  const auto runComposite = [](const std::string& src, const std::string& name, const std::vector<sim::TCompositeObject>& objs,
-                               eval::TConfusionMatrix& pooled, app::TRunSummary* s) {
+  // Makes a composite folder (fresh) from a shared data set.
+  const auto makeComposite = [](const std::string& src, const std::string& name, const std::vector<sim::TCompositeObject>& objs) {
     const auto folder = outDir(name);
     EXPECT_GT(sim::compositeMovingObjects(sharedData(src), folder, objs).objectFrames, 0u);
-    const auto out = outDir(name + "_out");
-    EXPECT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", folder, "--out", out, "--set", "output.plots=false"}, s), 0);
-    const eval::TConfusionMatrix c =
-        eval::classificationAgainstMaskFolder(eval::readClassificationsCsv(out + "/classifications.csv"), folder, 1).confusion;
-    pooled.staticAsStatic += c.staticAsStatic, pooled.staticAsDynamic += c.staticAsDynamic;
-    pooled.dynamicAsStatic += c.dynamicAsStatic, pooled.dynamicAsDynamic += c.dynamicAsDynamic;
+    return folder;
+  };
+  // Runs a config on a composite folder; returns the output folder and, when `pooled` is given, adds
+  // the decisions scored against the folder's masks.
+  const auto runOn = [](const std::string& cfg, const std::string& folder, eval::TConfusionMatrix* pooled,
+                        app::TRunSummary* s) {
+    const auto out = outDir(std::filesystem::path(folder).filename().string() + "_" + cfg);
+    EXPECT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", folder, "--out", out, "--set", "output.plots=false"}, s), 0);
+    if (pooled)
+    {
+      const eval::TConfusionMatrix c =
+          eval::classificationAgainstMaskFolder(eval::readClassificationsCsv(out + "/classifications.csv"), folder, 1).confusion;
+      pooled->staticAsStatic += c.staticAsStatic, pooled->staticAsDynamic += c.staticAsDynamic;
+      pooled->dynamicAsStatic += c.dynamicAsStatic, pooled->dynamicAsDynamic += c.dynamicAsDynamic;
+    }
     return out;
   };
   const auto median = [](std::vector<double> v) {
@@ -171,26 +182,35 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
   const eval::TTrajectory ref = eval::readTumTrajectory(outClean + "/trajectory.txt");
   const std::vector<std::array<double, 3>> tsVariants{{0.45, 30, 60}, {0.44, 30, 60}, {0.46, 30, 60}, {0.45, 28, 60}, {0.45, 30, 56}};
   eval::TConfusionMatrix tsPooled;
-  std::vector<double> deviations;
+  std::vector<double> deviations, deviationsNoShadow;
   for (std::size_t i = 0; i < tsVariants.size(); ++i)
   {
     const auto& [scale, amp, period] = tsVariants[i];
-    const auto out = runComposite(
-        "monoslam_testseq", "composite_ts" + std::to_string(i),
-        {object(visp, 170, 140, 400, 280, scale, scale, Vec2(-100, 120), Vec2(420, 120), 100, 400, amp, period),
-         object(visp, 170, 140, 400, 280, 0.5, 0.7, Vec2(420, 100), Vec2(-100, 140), 600, 900, amp, period)},
-        tsPooled, nullptr);
-    const eval::TTrajectory est = eval::readTumTrajectory(out + "/trajectory.txt");
-    EXPECT_EQ(est.size(), 1000u) << "variant " << i;
-    deviations.push_back(eval::computeAte(est, ref).rmseOverPath);
-    std::printf("testseq + pasted objects, variant %zu: deviation from the clean run %.3f %% of path\n", i, 100 * deviations.back());
+    const std::vector<sim::TCompositeObject> objs{
+        object(visp, 170, 140, 400, 280, scale, scale, Vec2(-100, 120), Vec2(420, 120), 100, 400, amp, period),
+        object(visp, 170, 140, 400, 280, 0.5, 0.7, Vec2(420, 100), Vec2(-100, 140), 600, 900, amp, period)};
+    const auto folder = makeComposite("monoslam_testseq", "composite_ts" + std::to_string(i), objs);
+    for (const bool shadow : {true, false})
+    {
+      const auto out = runOn(shadow ? "imm7-shadow" : "imm7", folder, shadow ? &tsPooled : nullptr, nullptr);
+      const eval::TTrajectory est = eval::readTumTrajectory(out + "/trajectory.txt");
+      EXPECT_EQ(est.size(), 1000u) << "variant " << i;
+      (shadow ? deviations : deviationsNoShadow).push_back(eval::computeAte(est, ref).rmseOverPath);
+    }
+    std::printf("testseq + pasted objects, variant %zu: deviation from the clean run %.3f %% of path (IMM without shadow "
+                "filter %.3f %%)\n",
+                i, 100 * deviations.back(), 100 * deviationsNoShadow.back());
   }
-  std::printf("testseq + pasted objects, 5 variants: median deviation %.3f %% of path; moving->static %zu/%zu, "
-              "static->dynamic %zu/%zu\n",
-              100 * median(deviations), tsPooled.dynamicAsStatic, tsPooled.trulyDynamic(), tsPooled.staticAsDynamic,
+  const auto mean = [](const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / v.size(); };
+  std::printf("testseq + pasted objects, 5 variants: mean deviation %.3f %% of path (median %.3f %%), IMM without shadow "
+              "filter %.3f %% (median %.3f %%); moving->static %zu/%zu, static->dynamic %zu/%zu\n",
+              100 * mean(deviations), 100 * median(deviations), 100 * mean(deviationsNoShadow),
+              100 * median(deviationsNoShadow), tsPooled.dynamicAsStatic, tsPooled.trulyDynamic(), tsPooled.staticAsDynamic,
               tsPooled.trulyStatic());
-  // Measured: deviations 0.14 2.42 0.17 0.11 1.62 %; the IMM without shadow filter 1.96-2.41 % on all five.
-  EXPECT_LE(median(deviations), 0.005);
+  // Measured: full system 0.14 2.42 0.17 0.11 1.62 % (mean 0.89 %); without the shadow filter
+  // 2.36 2.32 1.96 2.32 2.41 % (mean 2.28 %). The claim (paper 2, Fig. 5): the shadow filter keeps the
+  // objects out of the estimate; it does so in 3 of 5 variations, the IMM alone in none.
+  EXPECT_LE(mean(deviations), 0.75 * mean(deviationsNoShadow));
   EXPECT_GE(tsPooled.trulyDynamic(), 100u);
   EXPECT_LE(tsPooled.movingAsStaticRate(), 0.01);  // measured 1 of 200
 
@@ -208,10 +228,11 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
   for (std::size_t i = 0; i < viVariants.size(); ++i)
   {
     app::TRunSummary s;
-    runComposite("visp_rbt", "composite_visp" + std::to_string(i),
-                 {object(desk, 0, 0, 320, 240, viVariants[i][0], viVariants[i][0], Vec2(-160, 240), Vec2(800, 240), 0, 98,
-                         viVariants[i][1], 50)},
-                 viPooled, &s);
+    runOn("imm7-shadow",
+          makeComposite("visp_rbt", "composite_visp" + std::to_string(i),
+                        {object(desk, 0, 0, 320, 240, viVariants[i][0], viVariants[i][0], Vec2(-160, 240), Vec2(800, 240),
+                                0, 98, viVariants[i][1], 50)}),
+          &viPooled, &s);
     ASSERT_TRUE(s.ate);
     ates.push_back(s.ate->rmseOverPath);
   }
