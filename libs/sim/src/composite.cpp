@@ -143,7 +143,6 @@ TCompositeStats compositeMovingObjects(const std::string& sourceFolder, const st
     cv::Mat mask = cv::Mat::zeros(frame.size(), CV_8UC1);
     cv::Mat img;
     frame.convertTo(img, channels == 1 ? CV_32FC1 : CV_32FC3);
-    bool any = false;
     for (std::size_t k = 0; k < objects.size(); ++k)
     {
       const TCompositeObject& o = objects[k];
@@ -166,9 +165,7 @@ TCompositeStats compositeMovingObjects(const std::string& sourceFolder, const st
       cv::Mat keep;
       cv::subtract(cv::Scalar::all(1.0), alphaN, keep);
       img = img.mul(keep) + tex.mul(alphaN);
-      cv::Mat covered = alpha >= 0.5f;
-      mask.setTo(static_cast<int>(k + 1), covered);
-      if (cv::countNonZero(covered) > 0) any = true;
+      mask.setTo(static_cast<int>(k + 1), alpha >= 0.5f);
       char line[160];
       std::snprintf(line, sizeof(line), "%.6f %zu %.3f %.3f %.5f\n", f.timestamp, k + 1, c.x(), c.y(), s);
       objFile << line;
@@ -177,9 +174,9 @@ TCompositeStats compositeMovingObjects(const std::string& sourceFolder, const st
     const std::string rel = writer.addFrame(f.timestamp, frame);
     const std::string maskPath = (out / "masks" / fs::path(rel).filename()).string();
     if (!cv::imwrite(maskPath, mask)) throw std::runtime_error("cannot write '" + maskPath + "'");
-    if (any)
+    if (const int covered = cv::countNonZero(mask); covered > 0)
     {
-      const double cov = static_cast<double>(cv::countNonZero(mask)) / static_cast<double>(mask.total());
+      const double cov = static_cast<double>(covered) / static_cast<double>(mask.total());
       ++st.objectFrames;
       st.meanCoverage += cov;
       st.maxCoverage = std::max(st.maxCoverage, cov);
