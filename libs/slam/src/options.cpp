@@ -168,7 +168,7 @@ void TIMMBankOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const s
   c.write(s, "transition_matrix", joinNumbers(transition_matrix), mrpt::config::MRPT_SAVE_NAME_PADDING(),
           mrpt::config::MRPT_SAVE_VALUE_PADDING(), "r x r Markov matrix, row-major, rows sum to 1 ([] = from transition_stay)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(transition_stay, "diagonal of the default Markov matrix");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(general_entry, "markov: every mode may switch into a general one; evidence: not from a mode with v = 0 (doc/imm.md)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(general_entry, "markov: every mode may switch into a general one; evidence: not from a mode with v = 0 (doc/imm.md; shapes the default matrix, an explicit transition_matrix is used as given)");
   c.write(s, "prior", joinNumbers(prior), mrpt::config::MRPT_SAVE_NAME_PADDING(), mrpt::config::MRPT_SAVE_VALUE_PADDING(),
           "initial model probabilities ([] = uniform)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(probability_floor, "lower bound of every model probability");
