@@ -35,6 +35,7 @@ CIMMEstimator::CIMMEstimator(const MatX& transition, const VecX& prior, double f
   if (!(m_mu.array() >= 0).all() || std::abs(m_mu.sum() - 1.0) > 1e-9)
     throw std::invalid_argument("IMM: prior model probabilities must be >= 0 and sum to 1");
   m_modes.resize(r);
+  m_alias.assign(r, -1);
   m_scratch.resize(r);
   m_mixW = MatX::Identity(r, r);
 }
@@ -42,6 +43,44 @@ CIMMEstimator::CIMMEstimator(const MatX& transition, const VecX& prior, double f
 void CIMMEstimator::setAllModes(const VecX& x, const MatX& P)
 {
   for (auto& m : m_modes) m = TGaussian{x, P};
+  std::fill(m_alias.begin(), m_alias.end(), -1);
+  m_numAliased = 0;
+}
+
+TGaussian& CIMMEstimator::mode(int i)
+{
+  if (m_numAliased.load() > 0)
+  {
+    const std::lock_guard<std::mutex> lock(m_aliasMutex);
+    unalias(i);
+    for (int j = 0; j < numModels(); ++j)
+      if (m_alias[j] == i) unalias(j);  // they keep the covariance mode i has now
+  }
+  return m_modes[i];
+}
+
+void CIMMEstimator::unalias(int i)
+{
+  const int s = m_alias[i];
+  if (s < 0) return;
+  m_modes[i].x = m_modes[s].x;
+  m_modes[i].P = m_modes[s].P;
+  m_alias[i] = -1;
+  --m_numAliased;
+}
+
+void CIMMEstimator::aliasMode(int i, int source)
+{
+  const int r = numModels();
+  if (i < 0 || i >= r || source < 0 || source >= r) throw std::out_of_range("IMM::aliasMode: no such mode");
+  const std::lock_guard<std::mutex> lock(m_aliasMutex);
+  source = root(source);
+  if (source == i) return;  // already mode i's own covariance
+  for (int j = 0; j < r; ++j)
+    if (m_alias[j] == i) unalias(j);  // they keep mode i's current covariance
+  if (m_alias[i] < 0) ++m_numAliased;
+  m_alias[i] = source;
+  m_modes[i].x = m_modes[source].x;
 }
 
 MatX CIMMEstimator::transitionOver(double steps) const
@@ -80,9 +119,12 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
       m_mixW(j, i) = m_muPred[i] > 0 ? pi(j, i) * m_mu[j] / m_muPred[i] : (i == j ? 1.0 : 0.0);
   if (r == 1) return;
 
+  // Inputs: mode j's Gaussian is in(j), its own or the one it shares (aliasMode()); outputs go to
+  // each mode's own storage. A shared covariance is read once per column for all the modes sharing it.
+  const auto in = [this](int j) -> const TGaussian& { return m_modes[root(j)]; };
   const Eigen::Index n = m_modes[0].x.size();
-  for (const auto& m : m_modes)
-    if (m.x.size() != n || m.P.rows() != n || m.P.cols() != n)
+  for (int j = 0; j < r; ++j)
+    if (in(j).x.size() != n || in(j).P.rows() != n || in(j).P.cols() != n)
       throw std::logic_error("IMM::mix: modes have different dimensions");
 
   // Split of the weights: W_ji = (beta_i + Delta_ji) mu^j / c_i over the support J_i = {j: pi_ji > 0}
@@ -123,12 +165,12 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
   // xm = sum_j mu^j x^j: y_j = x^j - xm and ybar_i = sum_j W_ji y_j (= xbar^i - xm), differences.
   m_mixXm.setZero(n);
   for (int j = 0; j < r; ++j)
-    if (m_mu[j] > 0) m_mixXm.noalias() += m_mu[j] * m_modes[j].x;
+    if (m_mu[j] > 0) m_mixXm.noalias() += m_mu[j] * in(j).x;
   m_mixY.resize(n, r);
   m_mixMuYT.resize(r, n);
   for (int j = 0; j < r; ++j)
   {
-    m_mixY.col(j) = m_modes[j].x - m_mixXm;
+    m_mixY.col(j) = in(j).x - m_mixXm;
     m_mixMuYT.row(j) = m_mu[j] * m_mixY.col(j).transpose();
   }
   // A group whose support is every input uses m_mixMuYT itself; others a copy with the rows outside it zero.
@@ -148,7 +190,7 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
     for (int j = 0; j < r; ++j)
       if (m_mixW(j, i) > 0)
       {
-        m_mixXbar.col(i).noalias() += m_mixW(j, i) * m_modes[j].x;
+        m_mixXbar.col(i).noalias() += m_mixW(j, i) * in(j).x;
         m_mixYbar.col(i).noalias() += m_mixW(j, i) * m_mixY.col(j);
       }
   // In place when every output's own terms come from its own input only (A diagonal: pi = a I + b 1 1^T,
@@ -159,6 +201,22 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
     for (int j = 0; j < r && inplace; ++j) inplace = j == i || !(m_mixA(j, i) > 0);
   if (!inplace)
     for (int i = 0; i < r; ++i) m_scratch[i].resize(n, n);
+  // In place, a mode sharing another's covariance writes its output into its own storage before the
+  // owner overwrites the column they both read: sharing modes first. One the mixing leaves untouched
+  // (c_i = 0) gets its own copy now.
+  m_mixOrder.clear();
+  for (int i = 0; i < r; ++i)
+    if (m_alias[i] >= 0)
+    {
+      if (inplace && !(m_muPred[i] > 0))
+        unalias(i);
+      else
+        m_mixOrder.push_back(i);
+    }
+  for (int i = 0; i < r; ++i)
+    if (m_alias[i] < 0) m_mixOrder.push_back(i);
+  for (int i = 0; i < r; ++i)
+    if (m_modes[i].P.rows() != n || m_modes[i].P.cols() != n) m_modes[i].P.resize(n, n);  // (stale storage)
 
   // Covariances, by chunks of 16 columns: column c of every output, rows [c, n) (lower triangle,
   // every access sequential), then the chunk's rows of the upper triangle copied from its own lower
@@ -180,9 +238,9 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
         const MatX& muYT = m_mixMuYTg[g].size() ? m_mixMuYTg[g] : m_mixMuYT;
         u.noalias() = m_mixY.bottomRows(h) * muYT.col(col);
         for (int j = 0; j < r; ++j)
-          if (m_mu[j] > 0 && m_mixSupp[g][j]) u += m_mu[j] * m_modes[j].P.col(col).tail(h);
+          if (m_mu[j] > 0 && m_mixSupp[g][j]) u += m_mu[j] * in(j).P.col(col).tail(h);
       }
-      for (int i = 0; i < r; ++i)
+      for (const int i : m_mixOrder)
       {
         const int grp = m_mixGroup[i];
         Eigen::Map<VecX> u(grp >= 0 ? m_mixU.col(static_cast<Eigen::Index>(t) * nGroups + grp).data() + col : nullptr,
@@ -190,7 +248,7 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
         auto o = (inplace ? m_modes[i].P : m_scratch[i]).col(col).tail(h);
         if (!(m_muPred[i] > 0))
         {
-          if (!inplace) o = m_modes[i].P.col(col).tail(h);
+          if (!inplace) o = in(i).P.col(col).tail(h);
           continue;
         }
         // o = B_i u + sum_{j: A_ji > 0} A_ji (P^j(:, col) + y_j y_j(col)) - ybar_i ybar_i(col),
@@ -209,7 +267,7 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
         }
         {
           const double a = m_mixA(j, i);
-          const auto Pj = m_modes[j].P.col(col).tail(h);
+          const auto Pj = in(j).P.col(col).tail(h);
           const auto y = m_mixY.col(j).tail(h);
           if (b > 0)
             o = b * u + a * Pj + (a * m_mixY(col, j)) * y - yb * ybc;
@@ -219,7 +277,7 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
         for (++j; j < r; ++j)
         {
           const double a = m_mixA(j, i);
-          if (a > 0) o += a * m_modes[j].P.col(col).tail(h) + (a * m_mixY(col, j)) * m_mixY.col(j).tail(h);
+          if (a > 0) o += a * in(j).P.col(col).tail(h) + (a * m_mixY(col, j)) * m_mixY.col(j).tail(h);
         }
       }
     }
@@ -252,6 +310,8 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
     m_modes[i].x = m_mixXbar.col(i);
     if (!inplace) std::swap(m_modes[i].P, m_scratch[i]);
   }
+  std::fill(m_alias.begin(), m_alias.end(), -1);  // every output is in its own storage
+  m_numAliased = 0;
 }
 
 void CIMMEstimator::updateProbabilities(const VecX& logLik)
@@ -287,14 +347,14 @@ void CIMMEstimator::updateProbabilities(const VecX& logLik)
 void CIMMEstimator::combine(const VecX& w, VecX& x, MatX* P, math::CThreadPool* pool) const
 {
   const int r = numModels();
-  const Eigen::Index n = m_modes[0].x.size();
+  const Eigen::Index n = mode(0).x.size();
   x = VecX::Zero(n);
   for (int i = 0; i < r; ++i)
-    if (w[i] > 0) x.noalias() += w[i] * m_modes[i].x;
+    if (w[i] > 0) x.noalias() += w[i] * mode(i).x;
   if (!P) return;
   MatX D = MatX::Zero(n, r);
   for (int i = 0; i < r; ++i)
-    if (w[i] > 0) D.col(i) = std::sqrt(w[i]) * (m_modes[i].x - x);
+    if (w[i] > 0) D.col(i) = std::sqrt(w[i]) * (mode(i).x - x);
   P->resize(n, n);
   constexpr int bw = 32;
   const int nTiles = static_cast<int>((n + bw - 1) / bw);
@@ -304,7 +364,7 @@ void CIMMEstimator::combine(const VecX& w, VecX& x, MatX* P, math::CThreadPool* 
     auto out = P->middleCols(c0, cw);
     out.noalias() = D * D.middleRows(c0, cw).transpose();
     for (int i = 0; i < r; ++i)
-      if (w[i] > 0) out += w[i] * m_modes[i].P.middleCols(c0, cw);
+      if (w[i] > 0) out += w[i] * mode(i).P.middleCols(c0, cw);
   };
   if (pool)
     pool->parallelFor(0, nTiles, tile);
@@ -318,8 +378,8 @@ MatX CIMMEstimator::combinedBlock(const VecX& w, const VecX& xComb, int off, int
   for (int i = 0; i < numModels(); ++i)
   {
     if (!(w[i] > 0)) continue;
-    const VecX d = m_modes[i].x.segment(off, len) - xComb.segment(off, len);
-    B += w[i] * (m_modes[i].P.block(off, off, len, len) + d * d.transpose());
+    const VecX d = mode(i).x.segment(off, len) - xComb.segment(off, len);
+    B += w[i] * (mode(i).P.block(off, off, len, len) + d * d.transpose());
   }
   return B;
 }
@@ -329,8 +389,8 @@ MatX CIMMEstimator::combinedColumns(const VecX& w, const VecX& xComb, int off, i
   for (int i = 0; i < numModels(); ++i)
   {
     if (!(w[i] > 0)) continue;
-    const VecX d = m_modes[i].x - xComb;
-    C += w[i] * m_modes[i].P.middleCols(off, len);
+    const VecX d = mode(i).x - xComb;
+    C += w[i] * mode(i).P.middleCols(off, len);
     C.noalias() += (w[i] * d) * d.segment(off, len).transpose();
   }
   return C;

@@ -9,10 +9,12 @@
 #include <immslam/math/parallel.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
 #include <string>
+#include <utility>
 
 using namespace immslam;
 using namespace immslam::bayes;
@@ -453,6 +455,88 @@ TEST(IMM, MixingEqualsTextbookWithAZeroProbability)
     EXPECT_TRUE(imm.mode(i).x == modes[i].x);
     EXPECT_TRUE(imm.mode(i).P == modes[i].P);
   }
+}
+
+namespace
+{
+/** Mixing with modes 1 and 4 sharing mode 0's covariance and mode 5 mode 2's (aliasMode) against the
+ * same mixing of explicit copies: bitwise equal, with and without a pool. */
+void checkSharedInputs(const MatX& pi, const VecX& mu, const std::string& what)
+{
+  const int r = static_cast<int>(mu.size());
+  auto modes = randomModes(r, 37, 90);
+  std::vector<std::pair<int, int>> shares = {{1, 0}, {4, 0}, {5, 2}};
+  for (const auto& [i, s] : shares) modes[i] = modes[s];
+  for (const bool withPool : {false, true})
+  {
+    math::CThreadPool pool(2);
+    CIMMEstimator copied(pi, mu, 0.0), shared(pi, mu, 0.0);
+    for (int i = 0; i < r; ++i)
+    {
+      copied.mode(i) = modes[i];
+      shared.mode(i) = randomModes(1, 37, 91 + i)[0];  // other values: must not matter after aliasing
+    }
+    for (int i = 0; i < r; ++i)
+      if (std::none_of(shares.begin(), shares.end(), [i](const auto& p) { return p.first == i; }))
+        shared.mode(i) = modes[i];
+    for (const auto& [i, s] : shares) shared.aliasMode(i, s);
+    for (const auto& [i, s] : shares) EXPECT_TRUE(std::as_const(shared).mode(i).P == modes[s].P) << what;
+    copied.mix(withPool ? &pool : nullptr);
+    shared.mix(withPool ? &pool : nullptr);
+    for (int i = 0; i < r; ++i)
+    {
+      EXPECT_FALSE(shared.isAliased(i)) << what;
+      EXPECT_TRUE(shared.mode(i).x == copied.mode(i).x) << what << ", mode " << i;
+      EXPECT_TRUE(shared.mode(i).P == copied.mode(i).P) << what << ", mode " << i;
+    }
+  }
+}
+}  // namespace
+
+TEST(IMM, MixingOfSharedCovariancesEqualsMixingOfCopies)
+{
+  VecX mu(7);
+  mu << 0.3, 1e-6, 0.2, 0.05, 1e-6, 1e-6, 0.45;
+  mu /= mu.sum();
+  checkSharedInputs(defaultMarkov(7, 0.995), mu, "default pi (in place)");
+  MatX evidence = defaultMarkov(7, 0.995);
+  for (int j = 0; j < 4; ++j)
+  {
+    evidence.row(j).tail(3).setZero();
+    evidence(j, j) = 0.0;
+    evidence(j, j) = 1.0 - evidence.row(j).sum();
+  }
+  checkSharedInputs(evidence, mu, "block-structured pi (in place, two supports)");
+  checkSharedInputs(randomMarkov(7, 92), mu, "random pi (buffered)");
+  // c_1 = 0: mode 1 cannot be entered and keeps what it shares, as its own copy.
+  MatX unreachable = defaultMarkov(7, 0.9);
+  unreachable.col(1).setZero();
+  for (int j = 0; j < 7; ++j) unreachable.row(j) /= unreachable.row(j).sum();
+  checkSharedInputs(unreachable, mu, "c_1 = 0");
+}
+
+TEST(IMM, WritingToASharedModeGivesTheOthersTheirOwnCopy)
+{
+  const auto modes = randomModes(3, 12, 95);
+  CIMMEstimator imm(defaultMarkov(3, 0.9), VecX::Constant(3, 1.0 / 3));
+  for (int i = 0; i < 3; ++i) imm.mode(i) = modes[i];
+  imm.aliasMode(1, 0);
+  imm.aliasMode(2, 1);  // shares mode 1's source: mode 0
+  EXPECT_TRUE(imm.isAliased(1) && imm.isAliased(2));
+  EXPECT_TRUE(std::as_const(imm).mode(2).P == modes[0].P);
+  imm.mode(0).P(3, 4) += 1.0;  // write access to the source: 1 and 2 keep the old covariance
+  EXPECT_FALSE(imm.isAliased(1) || imm.isAliased(2));
+  EXPECT_EQ(std::as_const(imm).mode(1).P(3, 4), modes[0].P(3, 4));
+  EXPECT_EQ(std::as_const(imm).mode(2).P(3, 4), modes[0].P(3, 4));
+  EXPECT_EQ(std::as_const(imm).mode(0).P(3, 4), modes[0].P(3, 4) + 1.0);
+  imm.aliasMode(2, 0);
+  imm.mode(2).x[0] += 1.0;  // write access to the sharing mode: the source is untouched
+  EXPECT_FALSE(imm.isAliased(2));
+  EXPECT_TRUE(std::as_const(imm).mode(2).P == std::as_const(imm).mode(0).P);
+  EXPECT_EQ(std::as_const(imm).mode(0).x[0] + 1.0, std::as_const(imm).mode(2).x[0]);
+  EXPECT_THROW(imm.aliasMode(3, 0), std::out_of_range);
+  imm.aliasMode(0, 0);  // itself: nothing
+  EXPECT_FALSE(imm.isAliased(0));
 }
 
 TEST(IMM, MixingWithOneModelChangesNothing)

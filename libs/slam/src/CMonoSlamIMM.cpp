@@ -463,16 +463,18 @@ void CMonoSlamIMM::settleDormantModes()
         if (!m_dormant[j] && familyRank(m_models[j]) >= familyRank(m_models[i]) &&
             (source[i] < 0 || mu[j] > mu[source[i]]))
           source[i] = j;
+  // A lazy mode without a source (a frame without measurements): its prediction is its posterior.
   m_pool->parallelFor(0, r, [&](int i) {
-    if (source[i] < 0)
-    {
-      materialize(i);  // a lazy mode of a frame without measurements: its prediction is its posterior
-      return;
-    }
-    m_imm->mode(i).x = m_imm->mode(source[i]).x;
-    m_imm->mode(i).P = m_imm->mode(source[i]).P;
-    m_lazy[i].active = false;
+    if (source[i] < 0) materialize(i);
   });
+  // The others take their source's posterior, shared rather than copied (bitwise the same; the next
+  // mixing reads it as their input).
+  for (int i = 0; i < r; ++i)
+    if (source[i] >= 0)
+    {
+      m_imm->aliasMode(i, source[i]);
+      m_lazy[i].active = false;
+    }
   std::fill(m_dormant.begin(), m_dormant.end(), 0);
 }
 

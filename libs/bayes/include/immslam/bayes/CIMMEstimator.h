@@ -7,7 +7,9 @@
 
 #include <immslam/math/types.h>
 
+#include <atomic>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 namespace immslam::math
@@ -36,11 +38,22 @@ class CIMMEstimator
 
   int numModels() const { return static_cast<int>(m_mu.size()); }
 
-  /** The mode-conditioned states (all must keep the same dimension and layout). */
-  TGaussian& mode(int i) { return m_modes[i]; }
-  const TGaussian& mode(int i) const { return m_modes[i]; }
+  /** The mode-conditioned states (all must keep the same dimension and layout). Write access
+   * resolves the sharing of aliasMode() first (mode i gets its own copy, and the modes that share
+   * mode i's covariance get theirs before it can change); read access does not copy. */
+  TGaussian& mode(int i);
+  const TGaussian& mode(int i) const { return m_modes[root(i)]; }
   /** Sets every mode to the same Gaussian (start-up). */
   void setAllModes(const VecX& x, const MatX& P);
+  /** Mode i becomes an exact copy of mode `source` (mean and covariance), the covariance shared
+   * instead of copied until someone writes to either mode (mode() above) or the next mix(), which
+   * reads the shared covariance as mode i's input and writes mode i's output into mode i's own
+   * storage. For a bank whose improbable modes take the posterior of a probable one every frame
+   * (CMonoSlamIMM's dormant modes), that saves one n x n copy per such mode and frame, and the
+   * mixing reads each distinct covariance once. The estimate is bitwise the same as with a copy. */
+  void aliasMode(int i, int source);
+  /** True while mode i shares another mode's covariance (aliasMode()). */
+  bool isAliased(int i) const { return m_alias[i] >= 0; }
 
   /** Posterior probabilities mu_{k|k} (after updateProbabilities), or mu_{k-1|k-1} before. */
   const VecX& probabilities() const { return m_mu; }
@@ -117,6 +130,14 @@ class CIMMEstimator
   MatX m_mixW;
   double m_floor;
   std::vector<TGaussian> m_modes;
+  /** m_alias[i] >= 0: mode i's covariance (and mean) is mode m_alias[i]'s (never itself aliased);
+   * m_modes[i].P is then stale storage, reused as mode i's output by the next mix(). */
+  std::vector<int> m_alias;
+  int root(int i) const { return m_alias[i] >= 0 ? m_alias[i] : i; }
+  /** Gives mode i its own copy of the covariance it shares. */
+  void unalias(int i);
+  std::atomic<int> m_numAliased{0};  ///< modes with m_alias >= 0 (write access locks only when > 0)
+  std::mutex m_aliasMutex;            ///< mode() may be called for different modes from worker threads
   std::vector<MatX> m_scratch;  ///< output buffers of mix() when Delta is not diagonal, swapped with the modes' P
   // Buffers of mix() (kept between calls: no allocation while the dimension stays the same).
   VecX m_mixXm;    ///< xm = sum_j mu^j x^j, the point the mixing is expanded around
@@ -130,5 +151,6 @@ class CIMMEstimator
   std::vector<std::vector<char>> m_mixSupp;  ///< per group: which inputs j it sums (pi_ji > 0)
   std::vector<MatX> m_mixMuYTg;              ///< per group: r x n, m_mixMuYT with the rows outside it zero
   MatX m_mixU;     ///< n x (chunks x groups): one column of each group's S_J + T_J per column chunk
+  std::vector<int> m_mixOrder;  ///< the order outputs are written in (modes sharing a covariance first)
 };
 }  // namespace immslam::bayes
