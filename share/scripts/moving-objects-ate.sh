@@ -2,6 +2,8 @@
 # The paper's Fig. 5 as numbers, over several seeds (doc/shadow.md): ATE (% of path) of the full system
 # on the rendered hand-held path without and with moving objects (same seed: same camera path and
 # static world), and with the objects for the IMM without shadow filter and for the single model.
+# Control: the same three boxes standing still at the centre of their paths (amplitude and spin 0):
+# the full system's ATE with objects that occlude and add texture but do not move.
 # Usage: share/scripts/moving-objects-ate.sh [BUILD_DIR] [OUT_DIR] [SEED...]   (default build, /tmp/moving-ate, 7 11 23 42 101)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -12,14 +14,19 @@ SEEDS=("$@")
 [ ${#SEEDS[@]} -eq 0 ] && SEEDS=(7 11 23 42 101)
 mkdir -p "$OUT"
 ate() { "$BUILD/bin/imm-monoslam" "$1" "$2" --out "$3" --no-gui --quiet | grep -o '= [0-9.]* % of path' | head -n 1 | tr -dc '0-9.'; }
-printf 'seed  full/no-objects  full/objects  ratio  imm7/objects  single/objects\n'
+printf 'seed  full/no-objects  full/objects  ratio  imm7/objects  single/objects  full/still-boxes\n'
+STILL=()
+for k in 1 2 3; do STILL+=(--set "object$k.amplitude=0" --set "object$k.spin_deg_s=[0 0 0]"); done
 for s in "${SEEDS[@]}"; do
   for sc in handheld handheld-moving; do
     [ -d "$OUT/$sc-$s" ] || "$BUILD/bin/imm-render" "ini/scenarios/$sc.ini" "$OUT/$sc-$s" --seed "$s" > /dev/null
   done
+  [ -d "$OUT/still-boxes-$s" ] || "$BUILD/bin/imm-render" ini/scenarios/handheld-moving.ini "$OUT/still-boxes-$s" \
+    --seed "$s" "${STILL[@]}" > /dev/null
   a=$(ate ini/imm7-shadow.ini "$OUT/handheld-$s" "$OUT/out-static-$s")
   b=$(ate ini/imm7-shadow.ini "$OUT/handheld-moving-$s" "$OUT/out-moving-$s")
   c=$(ate ini/imm7.ini "$OUT/handheld-moving-$s" "$OUT/out-noshadow-$s")
   d=$(ate ini/single.ini "$OUT/handheld-moving-$s" "$OUT/out-single-$s")
-  printf '%-5s %-16s %-13s %-6s %-13s %s\n' "$s" "$a" "$b" "$(awk -v a="$a" -v b="$b" 'BEGIN{printf "%.2f", b/a}')" "$c" "$d"
+  e=$(ate ini/imm7-shadow.ini "$OUT/still-boxes-$s" "$OUT/out-still-$s")
+  printf '%-5s %-16s %-13s %-6s %-13s %-15s %s\n' "$s" "$a" "$b" "$(awk -v a="$a" -v b="$b" 'BEGIN{printf "%.2f", b/a}')" "$c" "$d" "$e"
 done
