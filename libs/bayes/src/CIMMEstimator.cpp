@@ -107,8 +107,10 @@ MatX CIMMEstimator::transitionOver(double steps) const
   return result;
 }
 
-void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
+void CIMMEstimator::mix(math::CThreadPool* pool, double steps, const std::vector<char>* lowerOnly)
 {
+  if (lowerOnly && static_cast<int>(lowerOnly->size()) != numModels())
+    throw std::invalid_argument("IMM::mix: one lower-triangle flag per mode");
   const int r = numModels();
   m_piStep = transitionOver(steps);
   const MatX& pi = m_piStep;
@@ -287,6 +289,7 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps)
     for (int i = 0; i < r; ++i)
     {
       if (inplace && !(m_muPred[i] > 0)) continue;  // untouched
+      if (lowerOnly && (*lowerOnly)[i] && m_muPred[i] > 0) continue;  // the caller mirrors
       double* S = (inplace ? m_modes[i].P : m_scratch[i]).data();
       for (Eigen::Index k = c0 + 1; k < n; ++k)
       {

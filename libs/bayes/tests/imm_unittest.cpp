@@ -515,6 +515,38 @@ TEST(IMM, MixingOfSharedCovariancesEqualsMixingOfCopies)
   checkSharedInputs(unreachable, mu, "c_1 = 0");
 }
 
+TEST(IMM, MixingIntoTheLowerTriangleOnly)
+{
+  // lowerOnly: the flagged outputs' lower triangles are the full mixing's, bitwise; the others whole.
+  VecX mu(7);
+  mu << 0.3, 1e-6, 0.2, 0.05, 1e-6, 1e-6, 0.45;
+  mu /= mu.sum();
+  const std::vector<char> flags = {1, 0, 1, 1, 0, 1, 1};
+  for (const MatX& pi : {defaultMarkov(7, 0.995), randomMarkov(7, 96)})
+    for (const bool withPool : {false, true})
+    {
+      math::CThreadPool pool(2);
+      const auto modes = randomModes(7, 41, 97);
+      CIMMEstimator whole(pi, mu, 0.0), lower(pi, mu, 0.0);
+      for (int i = 0; i < 7; ++i) whole.mode(i) = lower.mode(i) = modes[i];
+      whole.mix(withPool ? &pool : nullptr);
+      lower.mix(withPool ? &pool : nullptr, 1.0, &flags);
+      for (int i = 0; i < 7; ++i)
+      {
+        EXPECT_TRUE(lower.mode(i).x == whole.mode(i).x);
+        const MatX a = lower.mode(i).P.triangularView<Eigen::Lower>(), b = whole.mode(i).P.triangularView<Eigen::Lower>();
+        EXPECT_TRUE(a == b) << "mode " << i;
+        if (!flags[i])
+        {
+          EXPECT_TRUE(lower.mode(i).P == whole.mode(i).P) << "mode " << i;
+        }
+      }
+    }
+  CIMMEstimator imm(defaultMarkov(3, 0.9), VecX::Constant(3, 1.0 / 3));
+  const std::vector<char> wrong = {1, 1};
+  EXPECT_THROW(imm.mix(nullptr, 1.0, &wrong), std::invalid_argument);
+}
+
 TEST(IMM, WritingToASharedModeGivesTheOthersTheirOwnCopy)
 {
   const auto modes = randomModes(3, 12, 95);

@@ -89,16 +89,24 @@ void CMonoSlamIMM::predict(double dt)
   m_dormantDecided = false;
   std::fill(m_dormant.begin(), m_dormant.end(), 0);
   m_dormantUse.clear();
-  m_imm->mix(m_pool.get(), dt);
+  // The modes predicted now read only the lower triangle of their mixed covariance (the prediction
+  // mirrors its result): the mixing skips their mirror. A lazy mode's is read by blocks: mirrored.
+  std::vector<char> lazy(r), lowerOnly(r);
+  for (int i = 0; i < r; ++i)
+  {
+    lazy[i] = m_lazyPrediction && m_wasDormant[i] && m_models[i].family != motion::EMotionFamily::Stationary;
+    lowerOnly[i] = !lazy[i];
+  }
+  m_imm->mix(m_pool.get(), dt, &lowerOnly);
   m_pool->parallelFor(0, r, [&](int i) {
     auto& g = m_imm->mode(i);
     const auto inc = motion::motionIncrement(m_models[i], g.x.segment<3>(motion::kV), g.x.segment<3>(motion::kW), dt,
                                              m_focal);
     TLazyMode& L = m_lazy[i];
-    L.active = m_lazyPrediction && m_wasDormant[i] && !inc.identity;
+    L.active = lazy[i];
     if (!L.active)
     {
-      predictRobocentric(g, m_features, inc, m_scratch[i]);
+      predictRobocentric(g, m_features, inc, m_scratch[i], r > 1);  // (one model: not mixed, full)
       return;
     }
     // Dormant in the previous frame: likely dormant again. Mean and transition blocks only.

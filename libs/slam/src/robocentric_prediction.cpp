@@ -111,7 +111,7 @@ MatX shakeFactor(const bayes::TGaussian& g, const std::vector<TFeature>& feature
 }
 
 void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& features,
-                        const motion::TMotionIncrement& inc, MatX& scratch)
+                        const motion::TMotionIncrement& inc, MatX& scratch, bool lowerInput)
 {
   if (inc.identity)
   {
@@ -119,14 +119,35 @@ void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& featur
     g.x.segment<6>(kU).setZero();
     g.P.middleRows<6>(kU).setZero();
     g.P.middleCols<6>(kU).setZero();
-    if (inc.noiseCov.isZero()) return;
+    if (inc.noiseCov.isZero())
+    {
+      if (lowerInput) g.P.triangularView<Eigen::StrictlyUpper>() = g.P.transpose();
+      return;
+    }
     addCovarianceFactor(g.P, cameraJitterFactor(g, features, inc.noiseCov, inc.J_t_n, inc.J_dq_n));
     return;
   }
+  if (lowerInput) mirrorTransitionInputs(g.P, features);
   thread_local std::vector<TTransitionBlock> blocks;
   predictRobocentricMean(g, features, inc, blocks);
-  applyRobocentricTransition(g.P, blocks, scratch);
-  if (!inc.shakeCov.isZero()) addCovarianceFactor(g.P, shakeFactor(g, features, inc.shakeCov));
+  // With a shake, its rank update reads the lower triangle only and mirrors once for both.
+  const bool shake = !inc.shakeCov.isZero();
+  applyRobocentricTransition(g.P, blocks, scratch, !shake);
+  if (shake) addCovarianceFactor(g.P, shakeFactor(g, features, inc.shakeCov));
+}
+
+void mirrorTransitionInputs(MatX& P, const std::vector<TFeature>& features)
+{
+  const Eigen::Index n = P.rows();
+  const auto diagonalBlock = [&P](Eigen::Index off, Eigen::Index len) {
+    for (Eigen::Index c = off + 1; c < off + len; ++c)
+      for (Eigen::Index r = off; r < c; ++r) P(r, c) = P(c, r);
+  };
+  diagonalBlock(0, 7);
+  diagonalBlock(kU, 6);
+  P.block<7, 6>(0, kU) = P.block<6, 7>(kU, 0).transpose();
+  if (n > kU + 6) P.block(kU, kU + 6, 6, n - kU - 6) = P.block(kU + 6, kU, n - kU - 6, 6).transpose();
+  for (const auto& f : features) diagonalBlock(f.offset, f.dim());
 }
 
 void applyPoseCorrection(bayes::TGaussian& g, const std::vector<TFeature>& features, const Vec3& r_CW_new,
@@ -226,7 +247,7 @@ void predictRobocentricMean(bayes::TGaussian& g, const std::vector<TFeature>& fe
   g.P.block<6, 6>(kU, kU) += inc.noiseCov;
 }
 
-void applyRobocentricTransition(MatX& P, const std::vector<TTransitionBlock>& blocks, MatX& scratch)
+void applyRobocentricTransition(MatX& P, const std::vector<TTransitionBlock>& blocks, MatX& scratch, bool mirror)
 {
   const Eigen::Index n = P.rows();
   // P' = A P~ A^T with M = A P~ formed only where P' needs it: on and below the block diagonal
@@ -254,7 +275,7 @@ void applyRobocentricTransition(MatX& P, const std::vector<TTransitionBlock>& bl
       default: columnBlock<7>(b, blocks, Mu, P, panel); break;
     }
   }
-  P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
+  if (mirror) P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
 }
 
 MatX transitionColumns(const MatX& Pt, const std::vector<TTransitionBlock>& blocks, int bi)

@@ -13,6 +13,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <limits>
 #include <random>
 
 using namespace immslam;
@@ -195,6 +196,34 @@ TEST(Prediction, LazyTransitionBlocksMatchTheFullPrediction)
     applyRobocentricTransition(lazy.P, blocks, scratch);
     EXPECT_LT((lazy.P - full.P).norm(), tol) << spec;
   }
+}
+
+TEST(Prediction, FromTheLowerTriangleOnlyIsBitwiseTheSame)
+{
+  // The IMM's modes are predicted from a mixing that leaves the upper triangle stale
+  // (CIMMEstimator::mix with lowerOnly): the prediction must read only what it completes itself.
+  const TToyState s = movingToyState();
+  std::mt19937 rng(29);
+  const int n = static_cast<int>(s.x.size());
+  MatX P0 = randomCovariance(n, rng);
+  P0.triangularView<Eigen::StrictlyUpper>() = P0.transpose();  // exactly symmetric, as the filter keeps it
+  MatX stale = P0;
+  stale.triangularView<Eigen::StrictlyUpper>().setConstant(std::numeric_limits<double>::quiet_NaN());
+  for (const auto* spec : {"general:1", "rotation:0.5", "stationary", "stationary:0.3"})
+    for (const double shake : {0.0, 0.3})
+    {
+      TIMMBankOptions b;
+      b.models = spec;
+      b.shake_px = shake;
+      const auto model = b.parseModels()[0];
+      const auto inc = motion::motionIncrement(model, s.x.segment<3>(7), s.x.segment<3>(10), 1.0, 200);
+      bayes::TGaussian full{s.x, P0}, lower{s.x, stale};
+      MatX scratch;
+      predictRobocentric(full, s.feats, inc, scratch);
+      predictRobocentric(lower, s.feats, inc, scratch, true);
+      EXPECT_TRUE(lower.x == full.x) << spec << " shake " << shake;
+      EXPECT_TRUE(lower.P == full.P) << spec << " shake " << shake;  // bitwise, and no NaN read
+    }
 }
 
 TEST(Prediction, StationaryJitterCovariance)

@@ -15,9 +15,11 @@ namespace immslam::slam
 /** \f$ x' = f(x, u + n) \f$ and \f$ P' = A (P + E N E^\top) A^\top \f$, with A = df/dx block-structured
  * (each block depends on itself and on the velocities u only), computed block by block in
  * O(n sum_b (s_b^2 + 6 s_b)). The stationary model leaves the map and world pose untouched and zeroes
- * the velocities. \param scratch an n x n buffer reused between calls. */
+ * the velocities. \param scratch an n x n buffer reused between calls. \param lowerInput only the
+ * lower triangle of g.P is valid (bayes::CIMMEstimator::mix with lowerOnly): the few upper parts the
+ * transition reads are completed first (mirrorTransitionInputs()); the result is the same, bitwise. */
 void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& features,
-                        const motion::TMotionIncrement& inc, MatX& scratch);
+                        const motion::TMotionIncrement& inc, MatX& scratch, bool lowerInput = false);
 
 /** Relocalisation (relocalise.h): the camera is found at T_C'W = (r_CW_new, q_CW_new) instead of the
  * state's T_CW. The whole camera-centred state is re-expressed in C' as by a prediction step whose
@@ -48,8 +50,15 @@ struct TTransitionBlock
 void predictRobocentricMean(bayes::TGaussian& g, const std::vector<TFeature>& features,
                             const motion::TMotionIncrement& inc, std::vector<TTransitionBlock>& blocks);
 /** P <- A P~ A^T (exactly symmetric), about half of O(n sum_b (s_b^2 + 6 s_b)): only the lower block
- * triangle is computed. \p scratch: an n x 13 work buffer. */
-void applyRobocentricTransition(MatX& P, const std::vector<TTransitionBlock>& blocks, MatX& scratch);
+ * triangle is computed, then mirrored (unless !mirror: the caller reads the lower triangle only, e.g.
+ * a rank update before its own mirror). \p scratch: an n x 13 work buffer. */
+void applyRobocentricTransition(MatX& P, const std::vector<TTransitionBlock>& blocks, MatX& scratch,
+                                bool mirror = true);
+/** Completes, from the lower triangle, the parts of the strictly upper triangle of P that
+ * applyRobocentricTransition() reads besides the lower triangle: the rows of the velocities u (7..12)
+ * right of the diagonal, the world pose's rows in the columns of u, and every diagonal block (pose,
+ * u, each feature of `features`). O(n). */
+void mirrorTransitionInputs(MatX& P, const std::vector<TFeature>& features);
 /** n x 3 factor F, F F^T = B N B^T: the covariance a zero-mean shake of the camera (a rotation exp(s)
  * after the motion, s ~ N(0, shakeCov), motion::TMotionIncrement::shakeCov) adds to the predicted state g
  * (pose and features re-expressed through it; the velocities are not changed). */
