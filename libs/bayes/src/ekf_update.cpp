@@ -21,11 +21,32 @@ void CSparseJacobian::addBlock(int row, int col, const MatX& J)
   m_blocks.push_back({row, col, J});
 }
 
+namespace
+{
+/** out += A B^T for a 2 x C block B (the measurement blocks of one image point; C = 3 or 6 for the
+ * features), coefficient-wise: a general product would pack both operands for a 2-column result. */
+template <int C>
+void addTimesTransposed2(Eigen::Ref<MatX> out, const Eigen::Ref<const MatX>& A, const MatX& B)
+{
+  const Eigen::Matrix<double, 2, C> Bf = B;
+  out.noalias() += A.lazyProduct(Bf.transpose());
+}
+}  // namespace
+
 MatX CSparseJacobian::timesTransposedBy(const Eigen::Ref<const MatX>& P) const
 {
   MatX PHt = MatX::Zero(P.rows(), m_rows);
   for (const auto& b : m_blocks)
-    PHt.middleCols(b.row, b.J.rows()).noalias() += P.middleCols(b.col, b.J.cols()) * b.J.transpose();
+  {
+    auto out = PHt.middleCols(b.row, b.J.rows());
+    const auto A = P.middleCols(b.col, b.J.cols());
+    if (b.J.rows() == 2 && b.J.cols() == 6)
+      addTimesTransposed2<6>(out, A, b.J);
+    else if (b.J.rows() == 2 && b.J.cols() == 3)
+      addTimesTransposed2<3>(out, A, b.J);
+    else
+      out.noalias() += A * b.J.transpose();
+  }
   return PHt;
 }
 
@@ -33,7 +54,14 @@ MatX CSparseJacobian::times(const Eigen::Ref<const MatX>& M) const
 {
   MatX out = MatX::Zero(m_rows, M.cols());
   for (const auto& b : m_blocks)
-    out.middleRows(b.row, b.J.rows()).noalias() += b.J * M.middleRows(b.col, b.J.cols());
+  {
+    auto o = out.middleRows(b.row, b.J.rows());
+    const auto A = M.middleRows(b.col, b.J.cols());
+    if (b.J.rows() <= 2 && b.J.cols() <= 7)
+      o.noalias() += b.J.lazyProduct(A);  // a few rows: no packing
+    else
+      o.noalias() += b.J * A;
+  }
   return out;
 }
 
