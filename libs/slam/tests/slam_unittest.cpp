@@ -106,6 +106,14 @@ TToyState movingToyState()
   s.x.segment<3>(10) << 0.02, 0.01, -0.03;
   return s;
 }
+/** The increment of one model (a TIMMBankOptions spec, e.g. "general:1") at the toy state's velocities. */
+motion::TMotionIncrement toyIncrement(const TToyState& s, const char* spec, double shakePx = 0.0)
+{
+  TIMMBankOptions b;
+  b.models = spec;
+  b.shake_px = shakePx;
+  return motion::motionIncrement(b.parseModels()[0], s.x.segment<3>(7), s.x.segment<3>(10), 1.0, 200);
+}
 /** A dense random covariance A A^T (entries of A ~ N(0, 0.01)). */
 MatX randomCovariance(int n, std::mt19937& rng)
 {
@@ -160,10 +168,7 @@ TEST(Prediction, LazyTransitionBlocksMatchTheFullPrediction)
   const MatX P0 = randomCovariance(n, rng);
   for (const auto* spec : {"general:1", "rotation:0.5"})
   {
-    TIMMBankOptions b;
-    b.models = spec;
-    const auto model = b.parseModels()[0];
-    const auto inc = motion::motionIncrement(model, s.x.segment<3>(7), s.x.segment<3>(10), 1.0, 200);
+    const auto inc = toyIncrement(s, spec);
     bayes::TGaussian full{s.x, P0}, lazy{s.x, P0};
     MatX scratch;
     predictRobocentric(full, s.feats, inc, scratch);
@@ -212,11 +217,7 @@ TEST(Prediction, FromTheLowerTriangleOnlyIsBitwiseTheSame)
   for (const auto* spec : {"general:1", "rotation:0.5", "stationary", "stationary:0.3"})
     for (const double shake : {0.0, 0.3})
     {
-      TIMMBankOptions b;
-      b.models = spec;
-      b.shake_px = shake;
-      const auto model = b.parseModels()[0];
-      const auto inc = motion::motionIncrement(model, s.x.segment<3>(7), s.x.segment<3>(10), 1.0, 200);
+      const auto inc = toyIncrement(s, spec, shake);
       bayes::TGaussian full{s.x, P0}, lower{s.x, stale};
       MatX scratch;
       predictRobocentric(full, s.feats, inc, scratch);
