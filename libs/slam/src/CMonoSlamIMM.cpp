@@ -130,7 +130,7 @@ void CMonoSlamIMM::materialize(int i)
 {
   TLazyMode& L = m_lazy[i];
   if (!L.active) return;
-  applyRobocentricTransition(m_imm->mode(i).P, L.blocks, m_scratch[i]);
+  applyRobocentricTransition(m_imm->mode(i).P, L.blocks, m_scratch[i], L.shake.size() == 0);  // (one mirror)
   if (L.shake.size()) addCovarianceFactor(m_imm->mode(i).P, L.shake);
   L.active = false;
 }

@@ -49,8 +49,11 @@ class CIMMEstimator
    * instead of copied until someone writes to either mode (mode() above) or the next mix(), which
    * reads the shared covariance as mode i's input and writes mode i's output into mode i's own
    * storage. For a bank whose improbable modes take the posterior of a probable one every frame
-   * (CMonoSlamIMM's dormant modes), that saves one n x n copy per such mode and frame, and the
-   * mixing reads each distinct covariance once. The estimate is bitwise the same as with a copy. */
+   * (CMonoSlamIMM's dormant modes), that saves one n x n copy per such mode and frame (the mixing
+   * reads a shared column once from memory, then from cache). The estimate is bitwise the same as
+   * with a copy. Threads: write access to different modes may run concurrently (it locks while any
+   * covariance is shared); a read of a mode must not run concurrently with aliasMode() or with a write
+   * access that may resolve its sharing. */
   void aliasMode(int i, int source);
   /** True while mode i shares another mode's covariance (aliasMode()). */
   bool isAliased(int i) const { return m_alias[i] >= 0; }
