@@ -221,7 +221,10 @@ int runEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ost
       j << ",\n  \"rpe_delta\": " << rpe->delta << ",\n";
       j << "  \"rpe_n\": " << rpe->nPairs << ",\n";
       j << "  \"rpe_translation_rmse\": " << jsonNumber(rpe->translationRmse) << ",\n";
-      j << "  \"rpe_rotation_rmse_deg\": " << jsonNumber(rpe->rotationRmseDeg);
+      j << "  \"rpe_rotation_rmse_deg\": " << jsonNumber(rpe->rotationRmseDeg) << ",\n";
+      j << "  \"rpe_direction_n\": " << rpe->nDirections << ",\n";
+      j << "  \"rpe_direction_median_deg\": " << jsonNumber(rpe->directionMedianDeg) << ",\n";
+      j << "  \"rpe_direction_rmse_deg\": " << jsonNumber(rpe->directionRmseDeg);
     }
     j << "\n}\n";
     out << j.str();
@@ -256,6 +259,8 @@ int runEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ost
     row("RPE delta") << rpe->delta << " (" << rpe->nPairs << " motions)\n";
     row("RPE translation rmse") << num(rpe->translationRmse) << "\n";
     row("RPE rotation rmse") << num(rpe->rotationRmseDeg) << " deg\n";
+    row("RPE direction") << "median " << num(rpe->directionMedianDeg) << " deg, rmse " << num(rpe->directionRmseDeg)
+                         << " deg (" << rpe->nDirections << " motions >= " << num(rpe->minMotion) << ")\n";
   }
   out << s.str();
   return 0;

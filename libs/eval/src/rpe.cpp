@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -27,7 +28,11 @@ TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta, 
   r.delta = delta;
   r.scale = a == EAlignment::Sim3 ? alignTrajectories(est, gt, pairs, EAlignment::Sim3).s : 1.0;
 
-  std::vector<double> tr, rot;
+  std::vector<double> tr, rot, gtLen;
+  for (size_t k = 0; k + static_cast<size_t>(delta) < pairs.size(); ++k)
+    gtLen.push_back((gt[pairs[k + static_cast<size_t>(delta)].second].p_W_C - gt[pairs[k].second].p_W_C).norm());
+  r.minMotion = 0.1 * median(gtLen);
+  std::vector<double> dir;
   for (size_t k = 0; k + static_cast<size_t>(delta) < pairs.size(); ++k)
   {
     const auto& e0 = est[pairs[k].first];
@@ -46,6 +51,14 @@ TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta, 
     pe.translation = (dpE - dpG).norm();
     pe.rotationDeg =
         math::quatToRotationVector(math::quatMultiply(math::quatConjugate(dqG), dqE)).norm() * 180.0 / M_PI;
+    const double nE = dpE.norm(), nG = dpG.norm();
+    if (nG >= r.minMotion && nG > 0 && nE > 0)
+    {
+      pe.directionDeg = std::atan2(dpE.cross(dpG).norm(), dpE.dot(dpG)) * 180.0 / M_PI;
+      dir.push_back(pe.directionDeg);
+    }
+    else
+      pe.directionDeg = std::numeric_limits<double>::quiet_NaN();
     tr.push_back(pe.translation);
     rot.push_back(pe.rotationDeg);
     r.errors.push_back(pe);
@@ -59,6 +72,9 @@ TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta, 
   r.rotationMeanDeg = mean(rot);
   r.rotationMedianDeg = median(rot);
   r.rotationMaxDeg = maxValue(rot);
+  r.nDirections = dir.size();
+  r.directionMedianDeg = dir.empty() ? std::numeric_limits<double>::quiet_NaN() : median(dir);
+  r.directionRmseDeg = dir.empty() ? std::numeric_limits<double>::quiet_NaN() : rms(dir);
   return r;
 }
 }  // namespace immslam::eval

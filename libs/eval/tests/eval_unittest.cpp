@@ -537,6 +537,36 @@ TEST(Rpe, ScaledCopyHasZeroRpeWithSim3AndKnownErrorWithout)
   EXPECT_THROW(computeRpe(est, gt, 500), std::runtime_error);
 }
 
+TEST(Rpe, DirectionErrorIsScaleFreeAndKnown)
+{
+  // A straight path along x at 0.1 per frame; the estimate drifts its heading by a known angle about
+  // z (positions only, orientation identity): every relative translation over delta frames is rotated by
+  // that angle, at any scale.
+  TTrajectory gt, est;
+  const double ang = 10.0 * M_PI / 180.0;
+  for (int k = 0; k < 50; ++k)
+  {
+    gt.push_back(TStampedPose{k / 30.0, Vec3(0.1 * k, 0, 0), Vec4(1, 0, 0, 0)});
+    est.push_back(TStampedPose{k / 30.0, 3.0 * Vec3(0.1 * k * std::cos(ang), 0.1 * k * std::sin(ang), 0), Vec4(1, 0, 0, 0)});
+  }
+  const TRpeResult r = computeRpe(est, gt, 5, EAlignment::SE3);
+  EXPECT_EQ(r.nDirections, r.nPairs);
+  EXPECT_NEAR(r.directionMedianDeg, 10.0, 1e-9);
+  EXPECT_NEAR(r.directionRmseDeg, 10.0, 1e-9);
+  for (const auto& e : r.errors) EXPECT_NEAR(e.directionDeg, 10.0, 1e-9);
+  // A ground truth that stands still for a while: those motions have no direction.
+  TTrajectory still = gt, est2 = gt;
+  for (int k = 10; k < 20; ++k) still[k].p_W_C = still[10].p_W_C;
+  for (int k = 20; k < 50; ++k) still[k].p_W_C.x() -= 1.0;
+  est2 = still;
+  const TRpeResult s2 = computeRpe(est2, still, 1, EAlignment::SE3);
+  EXPECT_EQ(s2.nDirections, s2.nPairs - 10);  // 10 motions within the still part (and none longer)
+  EXPECT_LT(s2.directionRmseDeg, 1e-6);
+  size_t nan = 0;
+  for (const auto& e : s2.errors) nan += std::isnan(e.directionDeg) ? 1 : 0;
+  EXPECT_EQ(nan, 10u);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Consistency
 TEST(Nees, KnownValuesAndNonPD)

@@ -16,6 +16,9 @@ struct TRpePairError
   double tEnd = 0;          ///< ground-truth timestamp of pair k + delta (s)
   double translation = 0;   ///< |s dp_est - dp_gt| (relative translations in the first pose's frame)
   double rotationDeg = 0;   ///< angle of dR_gt^T dR_est, degrees
+  /** Angle between dp_est and dp_gt, degrees: the direction of the relative translation, free of
+   * any scale (monocular SLAM); NaN when either translation is shorter than TRpeResult::minMotion. */
+  double directionDeg = 0;
 };
 
 /** Result of computeRpe(). */
@@ -32,6 +35,10 @@ struct TRpeResult
   double rotationMeanDeg = 0;    ///< mean rotation error
   double rotationMedianDeg = 0;  ///< median rotation error
   double rotationMaxDeg = 0;     ///< largest rotation error
+  double minMotion = 0;          ///< the shortest gt relative translation with a direction error
+  size_t nDirections = 0;        ///< relative motions with a direction error
+  double directionMedianDeg = 0; ///< median direction error (degrees; NaN if none)
+  double directionRmseDeg = 0;   ///< RMS direction error
   std::vector<TRpePairError> errors;  ///< one per compared relative motion, in time order
 };
 
@@ -40,7 +47,9 @@ struct TRpeResult
  * \f$ E_k = (Q_k^{-1} Q_{k+\delta})^{-1} (P_k^{-1} P_{k+\delta}) \f$ with the estimate's relative
  * translation multiplied by the scale s. A rigid alignment does not change relative motions, so
  * only s matters: from the Sim3 Umeyama alignment of the associated positions (a = Sim3) or 1
- * (SE3, None).
+ * (SE3, None). The direction error of the relative translation (scale-free) is computed for the
+ * motions whose ground-truth translation is at least 10 % of the median one (shorter ones are
+ * dominated by ground-truth noise and have no direction to speak of).
  * \param delta step in associated pairs (>= 1): 1 = consecutive associated frames.
  * \throws std::invalid_argument if delta < 1; std::runtime_error if fewer than delta + 1 pairs. */
 TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta = 1,
