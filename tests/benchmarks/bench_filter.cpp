@@ -163,13 +163,15 @@ void BM_FilterFrame(benchmark::State& st)
   const int threads = static_cast<int>(st.range(2));
   const int perFrame = 30;
   TRunningFilter run(nFeat, perFrame, bankSpec(which), threads, 30);
-  double matched = 0;
+  double matched = 0, dormant = 0;
   for (auto _ : st)
   {
     const auto& rep = run.step();
     matched += rep.nMatched;
+    dormant += rep.nDormantModes;
   }
   st.SetLabel(bankLabel(which));
+  st.counters["dormant"] = benchmark::Counter(dormant, benchmark::Counter::kAvgIterations);
   st.counters["n"] = static_cast<double>(run.filter->fusedMean().size());
   st.counters["models"] = run.filter->models().size();
   st.counters["threads"] = threads;
