@@ -1,0 +1,450 @@
+/* imm-monoslam — imm-rotate (see rotated_view.h). */
+#include <immslam/camera/CPinholeCamera.h>
+#include <immslam/io/CDatasetWriter.h>
+#include <immslam/io/CImageSource.h>
+#include <immslam/math/quaternion.h>
+#include <immslam/sim/rotated_view.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <ostream>
+#include <sstream>
+#include <stdexcept>
+
+namespace fs = std::filesystem;
+
+namespace immslam::sim
+{
+namespace
+{
+constexpr double kPi = 3.14159265358979323846;
+
+/** Frames of a dataset folder or rawlog (io::CImageSource) or of a video file (OpenCV). */
+class CFrameReader
+{
+ public:
+  CFrameReader(const std::string& source, double fps) : m_source(source)
+  {
+    std::error_code ec;
+    const bool isDir = fs::is_directory(source, ec);
+    if (!fs::exists(source, ec)) throw std::runtime_error("source not found: " + source);
+    const std::string ext = fs::path(source).extension().string();
+    if (isDir || ext == ".rawlog" || ext == ".gz")
+    {
+      m_images = io::openImageSource(source);
+      return;
+    }
+    m_video = std::make_unique<cv::VideoCapture>(source);
+    if (!m_video->isOpened())
+      throw std::runtime_error("cannot open " + source + " as a dataset folder, a rawlog or a video OpenCV decodes");
+    m_fps = fps > 0 ? fps : m_video->get(cv::CAP_PROP_FPS);
+    if (!(m_fps > 0 && m_fps < 1000)) m_fps = 30.0;
+  }
+
+  /** Next frame (colour when the source has colour); false at the end. Unreadable entries are
+   * counted in `skipped`. */
+  bool next(io::TFrame& f, std::size_t& skipped)
+  {
+    if (m_video)
+    {
+      cv::Mat img;
+      if (!m_video->read(img) || img.empty()) return false;
+      f = io::TFrame();
+      f.index = m_index;
+      f.timestamp = static_cast<double>(m_index) / m_fps;
+      ++m_index;
+      if (img.channels() == 3)
+      {
+        f.colour = img;
+        cv::cvtColor(img, f.grey, cv::COLOR_BGR2GRAY);
+      }
+      else
+        f.grey = img;
+      return true;
+    }
+    for (;;)
+    {
+      std::string why;
+      const io::ENextStatus s = m_images->next(f, why);
+      if (s == io::ENextStatus::Frame) return true;
+      if (s == io::ENextStatus::End) return false;
+      ++skipped;
+    }
+  }
+
+  camera::CCameraModel::Ptr calibration() const { return m_images ? m_images->calibration() : nullptr; }
+  std::optional<eval::TTrajectory> groundTruth() const
+  {
+    return m_images ? m_images->groundTruth() : std::optional<eval::TTrajectory>();
+  }
+
+ private:
+  std::string m_source;
+  io::CImageSource::Ptr m_images;
+  std::unique_ptr<cv::VideoCapture> m_video;
+  double m_fps = 30.0;
+  std::size_t m_index = 0;
+};
+
+void validate(const TRotatedViewOptions& o)
+{
+  if (o.width < 0 || o.height < 0) throw std::invalid_argument("virtual image size must be >= 0 (0 = default)");
+  if (!(o.focal >= 0) || !std::isfinite(o.focal)) throw std::invalid_argument("focal length must be >= 0 (0 = the source's)");
+  for (double a : {o.panDeg, o.tiltDeg, o.rollDeg})
+    if (!std::isfinite(a) || std::abs(a) > 45) throw std::invalid_argument("rotation amplitudes must be within +-45 degrees");
+  if (!(o.periodFrames > 0) || !std::isfinite(o.periodFrames)) throw std::invalid_argument("period must be > 0 frames");
+  if (!(o.foregroundGrey > 0) || o.foregroundGrey > 255) throw std::invalid_argument("foreground threshold must be in (0, 255]");
+  if (o.dilatePx < 0 || o.dilatePx > 100) throw std::invalid_argument("dilation must be 0-100 px");
+  if (!(o.fps >= 0) || !std::isfinite(o.fps)) throw std::invalid_argument("fps must be >= 0 (0 = the video's)");
+}
+
+/** Background of a still camera. A temporal median fails where the moving things stay more than half
+ * of the time (an arm held over the table), so each pixel's background is its most frequent *stable*
+ * grey level: a frame counts for a pixel when the pixel changes by less than `kStable` grey levels
+ * over `kLag` frames before and after it (a moving hand or object changes it; the world behind does
+ * not). Levels are histogrammed in bins of 8; the background is the mean of the fullest bin (the
+ * plain histogram when no frame was stable). Streams the video once with a 2 kLag + 1 frame window. */
+cv::Mat stableBackground(const std::string& source, const TRotatedViewOptions& o)
+{
+  constexpr int kLag = 3, kStable = 6, kBins = 32;
+  CFrameReader rd(source, o.fps);
+  std::vector<cv::Mat> window;  // the last 2 kLag + 1 grey frames
+  cv::Mat count, sum, countAll, sumAll;  // per pixel x bin: CV_32S counts, CV_32F sums
+  std::size_t n = 0, skipped = 0;
+  io::TFrame f;
+  const auto accumulate = [&](const cv::Mat& g, bool stableOnly, const cv::Mat& prev, const cv::Mat& next) {
+    for (int y = 0; y < g.rows; ++y)
+      for (int x = 0; x < g.cols; ++x)
+      {
+        const int v = g.at<unsigned char>(y, x);
+        const int idx = (y * g.cols + x) * kBins + v / (256 / kBins);
+        countAll.at<int>(idx) += 1;
+        sumAll.at<float>(idx) += static_cast<float>(v);
+        if (stableOnly && std::abs(v - prev.at<unsigned char>(y, x)) < kStable &&
+            std::abs(v - next.at<unsigned char>(y, x)) < kStable)
+        {
+          count.at<int>(idx) += 1;
+          sum.at<float>(idx) += static_cast<float>(v);
+        }
+      }
+  };
+  while ((o.maxFrames == 0 || n < o.maxFrames) && rd.next(f, skipped))
+  {
+    if (count.empty())
+    {
+      const int cells = f.grey.rows * f.grey.cols * kBins;
+      count = cv::Mat::zeros(1, cells, CV_32S), countAll = count.clone();
+      sum = cv::Mat::zeros(1, cells, CV_32F), sumAll = sum.clone();
+    }
+    if (!window.empty() && f.grey.size() != window.front().size()) continue;  // (checked when written)
+    window.push_back(f.grey.clone());
+    if (window.size() == 2 * kLag + 1)
+    {
+      accumulate(window[kLag], true, window.front(), window.back());
+      window.erase(window.begin());
+    }
+    ++n;
+  }
+  if (window.empty() && count.empty()) throw std::runtime_error("no readable frame in " + source);
+  // Frames too close to the ends for the stability test still count in the plain histogram.
+  for (const cv::Mat& g : window) accumulate(g, false, g, g);
+  const cv::Size size = window.back().size();
+  cv::Mat bg(size, CV_8UC1);
+  for (int y = 0; y < size.height; ++y)
+    for (int x = 0; x < size.width; ++x)
+    {
+      const int base = (y * size.width + x) * kBins;
+      const bool anyStable = [&] {
+        for (int b = 0; b < kBins; ++b)
+          if (count.at<int>(base + b) > 0) return true;
+        return false;
+      }();
+      const cv::Mat& c = anyStable ? count : countAll;
+      const cv::Mat& s = anyStable ? sum : sumAll;
+      int best = 0;
+      for (int b = 1; b < kBins; ++b)
+        if (c.at<int>(base + b) > c.at<int>(base + best)) best = b;
+      bg.at<unsigned char>(y, x) = cv::saturate_cast<unsigned char>(s.at<float>(base + best) / c.at<int>(base + best));
+    }
+  return bg;
+}
+
+/** Pixels that differ from the background: threshold, 3x3 opening (sensor noise), dilation. */
+cv::Mat movingMask(const cv::Mat& grey, const cv::Mat& background, const TRotatedViewOptions& o)
+{
+  cv::Mat diff, mask;
+  cv::absdiff(grey, background, diff);
+  cv::threshold(diff, mask, o.foregroundGrey, 1, cv::THRESH_BINARY);
+  cv::morphologyEx(mask, mask, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_RECT, {3, 3}));
+  // Holes inside a moving region smaller than 1 % of the image are parts of it whose grey level
+  // happens to match the background (a moving object is solid); larger ones are world seen through.
+  std::vector<std::vector<cv::Point>> contours;
+  std::vector<cv::Vec4i> hierarchy;
+  cv::findContours(mask.clone(), contours, hierarchy, cv::RETR_CCOMP, cv::CHAIN_APPROX_SIMPLE);
+  const double maxHole = 0.01 * mask.rows * mask.cols;
+  for (std::size_t k = 0; k < contours.size(); ++k)
+    if (hierarchy[k][3] >= 0 && cv::contourArea(contours[k]) < maxHole)
+      cv::drawContours(mask, contours, static_cast<int>(k), cv::Scalar(1), cv::FILLED);
+  if (o.dilatePx > 0)
+    cv::dilate(mask, mask,
+               cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * o.dilatePx + 1, 2 * o.dilatePx + 1}));
+  return mask;
+}
+
+bool parseNumber(const std::string& s, double& x)
+{
+  char* end = nullptr;
+  x = std::strtod(s.c_str(), &end);
+  return !s.empty() && *end == '\0' && std::isfinite(x);
+}
+}  // namespace
+
+std::vector<double> rotatedViewQuaternion(const TRotatedViewOptions& o, std::size_t i)
+{
+  const double t = 2 * kPi * static_cast<double>(i) / o.periodFrames;
+  const double deg = kPi / 180;
+  const Vec4 qPan = math::quatFromRotationVector(Vec3(0, o.panDeg * deg * std::sin(t), 0));
+  const Vec4 qTilt = math::quatFromRotationVector(Vec3(o.tiltDeg * deg * std::sin(t / 1.37), 0, 0));
+  const Vec4 qRoll = math::quatFromRotationVector(Vec3(0, 0, o.rollDeg * deg * std::sin(t / 1.83)));
+  const Vec4 q = math::quatMultiply(math::quatMultiply(qPan, qTilt), qRoll);
+  return {q[0], q[1], q[2], q[3]};
+}
+
+TRotatedViewStats rotateStillVideo(const std::string& source, const std::string& outFolder,
+                                   const TRotatedViewOptions& o)
+{
+  validate(o);
+  {
+    std::error_code ec;
+    if (fs::exists(outFolder, ec) && fs::equivalent(source, outFolder, ec))
+      throw std::runtime_error("the output folder " + outFolder + " is the source folder");
+  }
+  CFrameReader reader(source, o.fps);
+  camera::CCameraModel::Ptr src = o.calibFile.empty() ? reader.calibration() : camera::loadCalibFile(o.calibFile);
+  if (!src) throw std::runtime_error(source + " has no calibration: give --calib FILE (calib.txt format)");
+  const auto sourceGt = reader.groundTruth();
+  const int W = o.width > 0 ? o.width : 2 * static_cast<int>(std::lround(0.4 * src->width()));
+  const int H = o.height > 0 ? o.height : 2 * static_cast<int>(std::lround(0.4 * src->height()));
+  if (W > src->width() || H > src->height())
+    throw std::runtime_error("virtual image " + std::to_string(W) + "x" + std::to_string(H) +
+                             " is larger than the source's " + std::to_string(src->width()) + "x" +
+                             std::to_string(src->height()));
+  const double f = o.focal > 0 ? o.focal : src->fx();
+  const camera::CPinholeCamera virt(W, H, f, f, 0.5 * (W - 1), 0.5 * (H - 1));
+
+  cv::Mat background;
+  if (o.still) background = stableBackground(source, o);
+
+  fs::create_directories(outFolder);
+  if (o.still)
+  {
+    fs::create_directories(fs::path(outFolder) / "masks");
+    const std::string bgFile = (fs::path(outFolder) / "background.png").string();
+    if (!cv::imwrite(bgFile, background)) throw std::runtime_error("cannot write " + bgFile);
+  }
+  std::ostringstream comment;
+  comment << "imm-rotate: " << source << " seen by a camera rotating about its optical centre (pan " << o.panDeg
+          << ", tilt " << o.tiltDeg << ", roll " << o.rollDeg << " deg, period " << o.periodFrames << " frames)";
+  io::CDatasetWriter writer(outFolder, virt, comment.str());
+  const std::string labelsFile = (fs::path(outFolder) / "motion_labels.txt").string();
+  std::ofstream labels(labelsFile);
+  if (!labels) throw std::runtime_error("cannot write " + labelsFile);
+  labels << "# true camera motion since the previous frame (frame 0: stationary): stationary, rotation, general\n"
+            "# timestamp label\n";
+  const bool rotates = o.panDeg != 0 || o.tiltDeg != 0 || o.rollDeg != 0;
+
+  TRotatedViewStats st;
+  cv::Mat mapU(H, W, CV_32FC1), mapV(H, W, CV_32FC1);
+  io::TFrame fr;
+  std::size_t n = 0;
+  double movingSum = 0;
+  while ((o.maxFrames == 0 || n < o.maxFrames) && reader.next(fr, st.skipped))
+  {
+    if (fr.grey.cols != src->width() || fr.grey.rows != src->height())
+      throw std::runtime_error(source + ": frame " + std::to_string(fr.index) + " is " + std::to_string(fr.grey.cols) +
+                               "x" + std::to_string(fr.grey.rows) + ", the calibration " +
+                               std::to_string(src->width()) + "x" + std::to_string(src->height()));
+    const auto qv = rotatedViewQuaternion(o, n);
+    const Vec4 q(qv[0], qv[1], qv[2], qv[3]);
+    const Mat3 R = math::quatToRotation(q);
+    st.maxAngleDeg = std::max(st.maxAngleDeg, 2 * std::acos(std::min(1.0, std::abs(q[0]))) * 180 / kPi);
+    // Each virtual pixel: its ray, rotated into the source camera, projected with the real lens.
+    std::size_t outside = 0;
+    for (int v = 0; v < H; ++v)
+      for (int u = 0; u < W; ++u)
+      {
+        Vec2 uv;
+        const bool ok = src->project(R * virt.unproject(Vec2(u, v)).unitVector(), uv) && src->isInImage(uv);
+        mapU.at<float>(v, u) = ok ? static_cast<float>(uv.x()) : -1e4f;
+        mapV.at<float>(v, u) = ok ? static_cast<float>(uv.y()) : -1e4f;
+        outside += ok ? 0 : 1;
+      }
+    st.maxOutsideFraction = std::max(st.maxOutsideFraction, static_cast<double>(outside) / (W * static_cast<double>(H)));
+    const cv::Mat& in = fr.colour.empty() ? fr.grey : fr.colour;
+    cv::Mat out;
+    cv::remap(in, out, mapU, mapV, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(0));
+    // Ground truth: the virtual camera in the source's world (the source pose, or the identity).
+    eval::TStampedPose gt;
+    gt.timestamp = fr.timestamp;
+    gt.q_W_C = q;
+    bool haveGt = o.still;
+    if (sourceGt && !sourceGt->empty())
+    {
+      const auto best = std::min_element(sourceGt->begin(), sourceGt->end(), [&](const auto& a, const auto& b) {
+        return std::abs(a.timestamp - fr.timestamp) < std::abs(b.timestamp - fr.timestamp);
+      });
+      if (std::abs(best->timestamp - fr.timestamp) < 1e-3)
+      {
+        gt.p_W_C = best->p_W_C;
+        gt.q_W_C = math::quatMultiply(best->q_W_C, q);
+        haveGt = true;
+      }
+    }
+    const std::string name = writer.addFrame(fr.timestamp, out, haveGt ? &gt : nullptr);
+    char stamp[64];
+    std::snprintf(stamp, sizeof(stamp), "%.6f", fr.timestamp);
+    labels << stamp << ' ' << (n > 0 && rotates ? "rotation" : "stationary") << '\n';
+    if (o.still)
+    {
+      const cv::Mat maskSrc = movingMask(fr.grey, background, o);
+      cv::Mat mask;
+      cv::remap(maskSrc, mask, mapU, mapV, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
+      const std::string maskFile = (fs::path(outFolder) / "masks" / fs::path(name).filename()).string();
+      if (!cv::imwrite(maskFile, mask)) throw std::runtime_error("cannot write " + maskFile);
+      movingSum += cv::countNonZero(mask) / (W * static_cast<double>(H));
+    }
+    ++n;
+  }
+  writer.close();
+  if (!labels) throw std::runtime_error("write error in " + labelsFile);
+  if (n == 0) throw std::runtime_error("no readable frame in " + source);
+  st.frames = n;
+  st.meanMovingFraction = movingSum / static_cast<double>(n);
+  return st;
+}
+
+std::string rotateAppUsage()
+{
+  return "Usage: imm-rotate SOURCE OUT_FOLDER [options]\n"
+         "Makes a rotating camera's video from a real one (a still camera: tripod, webcam) and writes it as\n"
+         "a dataset folder with the truth: each frame is what a virtual camera with the same optical centre,\n"
+         "rotated by a scripted R(t), sees (a homography for a pure rotation, exact up to resampling); the\n"
+         "virtual image is a centred crop of the real view. Writes rgb/ rgb.txt calib.txt (pinhole, the\n"
+         "virtual camera) groundtruth.txt (the rotation; composed with the source's own ground truth if it\n"
+         "has one) motion_labels.txt, and for a still source masks/ (1 = pixel differs from the background,\n"
+         "its most frequent stable grey level: what moves) and background.png.\n"
+         "SOURCE: a video file (any format OpenCV/FFmpeg decodes), a dataset folder or a .rawlog.\n"
+         "Options:\n"
+         "  --calib FILE            the source's calibration (calib.txt format; required for a video)\n"
+         "  --size W,H              virtual image size (default 0.8 x the source's)\n"
+         "  --focal F               virtual focal length, px (default the source's fx)\n"
+         "  --rotate PAN,TILT,ROLL  amplitudes in degrees (default 3,2,1.5; 0,0,0 = a still camera)\n"
+         "  --period FRAMES         period of the pan (default 120; tilt 1.37x, roll 1.83x)\n"
+         "  --moving-source         the source camera moved: no masks (the background is not still)\n"
+         "  --threshold GREY        grey difference to the background that marks a moving pixel (default 30)\n"
+         "  --dilate PX             mask dilation radius (default 4)\n"
+         "  --frames N              stop after N frames\n"
+         "  --fps F                 frame rate of a video source (default the container's)\n"
+         "  --help                  this text\n"
+         "Exit status: 0 success, 1 bad input or failure, 2 bad usage.\n";
+}
+
+int runRotateApp(const std::vector<std::string>& args, std::ostream& out, std::ostream& err)
+{
+  const auto usageError = [&](const std::string& msg) {
+    err << "imm-rotate: " << msg << "\n" << rotateAppUsage();
+    return 2;
+  };
+  TRotatedViewOptions o;
+  std::vector<std::string> positional;
+  for (std::size_t i = 0; i < args.size(); ++i)
+  {
+    const std::string& a = args[i];
+    if (a == "--help" || a == "-h")
+    {
+      out << rotateAppUsage();
+      return 0;
+    }
+    if (a == "--moving-source")
+    {
+      o.still = false;
+      continue;
+    }
+    if (a.rfind("--", 0) != 0)
+    {
+      positional.push_back(a);
+      continue;
+    }
+    if (i + 1 >= args.size()) return usageError(a + " needs a value");
+    const std::string& v = args[++i];
+    if (a == "--calib")
+    {
+      o.calibFile = v;
+      continue;
+    }
+    std::vector<double> x;
+    {
+      std::stringstream ss(v);
+      std::string item;
+      double d = 0;
+      while (std::getline(ss, item, ','))
+      {
+        if (!parseNumber(item, d)) return usageError(a + ": '" + v + "' is not a number list");
+        x.push_back(d);
+      }
+    }
+    const auto isCount = [](double d) { return d >= 0 && d == std::floor(d) && d < 1e9; };
+    if (a == "--size")
+    {
+      if (x.size() != 2 || !isCount(x[0]) || !isCount(x[1]) || x[0] < 16 || x[1] < 16)
+        return usageError("--size needs W,H (integers >= 16), got '" + v + "'");
+      o.width = static_cast<int>(x[0]), o.height = static_cast<int>(x[1]);
+    }
+    else if (a == "--focal" && x.size() == 1 && x[0] > 0)
+      o.focal = x[0];
+    else if (a == "--rotate" && x.size() == 3)
+      o.panDeg = x[0], o.tiltDeg = x[1], o.rollDeg = x[2];
+    else if (a == "--period" && x.size() == 1 && x[0] > 0)
+      o.periodFrames = x[0];
+    else if (a == "--threshold" && x.size() == 1)
+      o.foregroundGrey = x[0];
+    else if (a == "--dilate" && x.size() == 1 && isCount(x[0]))
+      o.dilatePx = static_cast<int>(x[0]);
+    else if (a == "--frames" && x.size() == 1 && isCount(x[0]) && x[0] > 0)
+      o.maxFrames = static_cast<std::size_t>(x[0]);
+    else if (a == "--fps" && x.size() == 1 && x[0] > 0)
+      o.fps = x[0];
+    else if (a == "--focal" || a == "--rotate" || a == "--period" || a == "--threshold" || a == "--dilate" ||
+             a == "--frames" || a == "--fps")
+      return usageError("bad value for " + a + ": '" + v + "'");
+    else
+      return usageError("unknown option '" + a + "'");
+  }
+  if (positional.size() != 2) return usageError("expected SOURCE and OUT_FOLDER");
+  try
+  {
+    const TRotatedViewStats s = rotateStillVideo(positional[0], positional[1], o);
+    out << "imm-rotate: wrote " << s.frames << " frames to " << positional[1] << " (" << s.skipped
+        << " unreadable source frames skipped); rotation up to " << s.maxAngleDeg << " deg, at most "
+        << 100.0 * s.maxOutsideFraction << " % of a virtual image outside the real one";
+    if (o.still) out << "; " << 100.0 * s.meanMovingFraction << " % of the image marked moving on average";
+    out << "\n";
+    return 0;
+  }
+  catch (const std::exception& e)
+  {
+    err << "imm-rotate: error: " << e.what() << "\n";
+    return 1;
+  }
+}
+}  // namespace immslam::sim
