@@ -8,6 +8,7 @@ PKGS=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libegl1 libegl-mesa0 libgl1-mesa-dri   # offscreen scene snapshots (EGL, no X needed)
   clang libclang-rt-14-dev llvm-14       # fuzz.sh: libFuzzer + sanitizer runtimes, llvm-symbolizer
+  opencv-doc                     # its example videos: real video of a hand and of people (tests, real-videos.sh)
 )
 missing=()
 for p in "${PKGS[@]}"; do
