@@ -256,11 +256,16 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
   comment << "imm-rotate: " << source << " seen by a camera rotating about its optical centre (pan " << o.panDeg
           << ", tilt " << o.tiltDeg << ", roll " << o.rollDeg << " deg, period " << o.periodFrames << " frames)";
   io::CDatasetWriter writer(outFolder, virt, comment.str());
+  // Motion labels only for a still source (a moving one's motion class is not known here).
   const std::string labelsFile = (fs::path(outFolder) / "motion_labels.txt").string();
-  std::ofstream labels(labelsFile);
-  if (!labels) throw std::runtime_error("cannot write " + labelsFile);
-  labels << "# true camera motion since the previous frame (frame 0: stationary): stationary, rotation, general\n"
-            "# timestamp label\n";
+  std::ofstream labels;
+  if (o.still)
+  {
+    labels.open(labelsFile);
+    if (!labels) throw std::runtime_error("cannot write " + labelsFile);
+    labels << "# true camera motion since the previous frame (frame 0: stationary): stationary, rotation, general\n"
+              "# timestamp label\n";
+  }
   const bool rotates = o.panDeg != 0 || o.tiltDeg != 0 || o.rollDeg != 0;
 
   TRotatedViewStats st;
@@ -313,7 +318,7 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
     const std::string name = writer.addFrame(fr.timestamp, out, haveGt ? &gt : nullptr);
     char stamp[64];
     std::snprintf(stamp, sizeof(stamp), "%.6f", fr.timestamp);
-    labels << stamp << ' ' << (n > 0 && rotates ? "rotation" : "stationary") << '\n';
+    if (o.still) labels << stamp << ' ' << (n > 0 && rotates ? "rotation" : "stationary") << '\n';
     if (o.still)
     {
       const cv::Mat maskSrc = movingMask(fr.grey, background, o);
@@ -326,7 +331,7 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
     ++n;
   }
   writer.close();
-  if (!labels) throw std::runtime_error("write error in " + labelsFile);
+  if (o.still && !labels) throw std::runtime_error("write error in " + labelsFile);
   if (n == 0) throw std::runtime_error("no readable frame in " + source);
   st.frames = n;
   st.meanMovingFraction = movingSum / static_cast<double>(n);
@@ -341,7 +346,7 @@ std::string rotateAppUsage()
          "rotated by a scripted R(t), sees (a homography for a pure rotation, exact up to resampling); the\n"
          "virtual image is a centred crop of the real view. Writes rgb/ rgb.txt calib.txt (pinhole, the\n"
          "virtual camera) groundtruth.txt (the rotation; composed with the source's own ground truth if it\n"
-         "has one) motion_labels.txt, and for a still source masks/ (1 = pixel differs from the background,\n"
+         "has one), and for a still source motion_labels.txt, masks/ (1 = pixel differs from the background,\n"
          "its most frequent stable grey level: what moves) and background.png.\n"
          "SOURCE: a video file (any format OpenCV/FFmpeg decodes), a dataset folder or a .rawlog.\n"
          "Options:\n"

@@ -11,7 +11,7 @@
  * is a crop of the real one (smaller, same focal length) so that it stays inside the real view.
  *
  * Truth written with it: groundtruth.txt (the rotation, no translation; composed with the source's own
- * ground truth when it has one), motion_labels.txt, and for a camera that stood still (`still`),
+ * ground truth when it has one), and for a camera that stood still (`still`) motion_labels.txt and
  * masks/ in the renderer's format (0 static world, 1 moving): pixels whose grey level differs from the
  * still camera's background (per pixel, its most frequent grey level among the frames where it is
  * stable: a temporal median fails where a hand stays more than half of the time) by more than a
@@ -62,8 +62,8 @@ std::vector<double> rotatedViewQuaternion(const TRotatedViewOptions& o, std::siz
 
 /** Reads `source` (a dataset folder, a .rawlog or a video file OpenCV decodes) and writes
  * `outFolder` (CDatasetWriter layout): rgb/ (colour when the source is), rgb.txt with the source
- * timestamps, calib.txt (pinhole, the virtual camera), groundtruth.txt, motion_labels.txt and, for a
- * still source, masks/NNNNNN.png and background.png.
+ * timestamps, calib.txt (pinhole, the virtual camera), groundtruth.txt (still sources, and sources with
+ * their own ground truth) and, for a still source, motion_labels.txt, masks/NNNNNN.png and background.png.
  * \throws std::invalid_argument for bad options, std::runtime_error naming the file for an unreadable
  *         source or calibration, a source without calibration, a virtual image larger than the
  *         source's, or an output that cannot be written. */
