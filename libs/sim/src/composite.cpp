@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -28,11 +29,41 @@ struct TPrepared
 {
   cv::Mat texture;  ///< CV_32FC1 or CV_32FC3
   cv::Mat alpha;    ///< CV_32FC1 in [0, 1]
+  std::shared_ptr<io::CDatasetFolderSource> video;  ///< a video object's frames (texture/alpha per frame)
 };
+
+/** Texture and alpha of a video object's frame j (false once the video has ended). The alpha is the
+ * frame's mask, closed (a 9 px disc: parts of the object whose grey level matched the background
+ * are kept) and feathered (Gaussian, 0.7 px). */
+bool loadVideoFrame(const TCompositeObject& o, std::size_t k, TPrepared& p, std::size_t j, int channels)
+{
+  const auto& entries = p.video->entries();
+  if (j >= entries.size()) return false;
+  const std::string imgPath = p.video->imagePath(entries[j]);
+  const std::string maskPath =
+      (fs::path(o.video) / "masks" / fs::path(entries[j].path).filename()).string();
+  const cv::Mat img = cv::imread(imgPath, channels == 1 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
+  const cv::Mat mask = cv::imread(maskPath, cv::IMREAD_GRAYSCALE);
+  if (img.empty()) throw std::runtime_error("object " + std::to_string(k + 1) + ": cannot read video frame '" + imgPath + "'");
+  if (mask.empty() || mask.size() != img.size())
+    throw std::runtime_error("object " + std::to_string(k + 1) + ": no mask of the frame's size at '" + maskPath +
+                             "' (a video object needs masks/, e.g. from imm-rotate)");
+  const int w = o.cropW > 0 ? o.cropW : img.cols - o.cropX, h = o.cropH > 0 ? o.cropH : img.rows - o.cropY;
+  if (w < 4 || h < 4 || o.cropX + w > img.cols || o.cropY + h > img.rows)
+    throw std::invalid_argument("object " + std::to_string(k + 1) + ": crop is not inside the video's " +
+                                std::to_string(img.cols) + "x" + std::to_string(img.rows) + " frames");
+  const cv::Rect r(o.cropX, o.cropY, w, h);
+  img(r).convertTo(p.texture, channels == 1 ? CV_32FC1 : CV_32FC3);
+  cv::Mat m = mask(r) > 0;
+  cv::morphologyEx(m, m, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, {19, 19}));
+  m.convertTo(p.alpha, CV_32FC1, 1.0 / 255.0);
+  cv::GaussianBlur(p.alpha, p.alpha, {0, 0}, 0.7);
+  return true;
+}
 
 void validate(const TCompositeObject& o, std::size_t k)
 {
-  const std::string what = "object " + std::to_string(k + 1) + " (" + o.image + "): ";
+  const std::string what = "object " + std::to_string(k + 1) + " (" + (o.video.empty() ? o.image : o.video) + "): ";
   if (!(o.scaleFirst > 0) || !(o.scaleLast > 0)) throw std::invalid_argument(what + "scale must be > 0");
   if (!(o.wavePeriodFrames > 0)) throw std::invalid_argument(what + "wave period must be > 0 frames");
   if (!std::isfinite(o.waveAmplitudePx)) throw std::invalid_argument(what + "wave amplitude must be finite");
@@ -45,6 +76,22 @@ void validate(const TCompositeObject& o, std::size_t k)
 
 TPrepared prepare(const TCompositeObject& o, std::size_t k, int channels)
 {
+  if (!o.video.empty())
+  {
+    TPrepared p;
+    try
+    {
+      p.video = std::make_shared<io::CDatasetFolderSource>(o.video);
+    }
+    catch (const std::exception& e)
+    {
+      throw std::runtime_error("object " + std::to_string(k + 1) + ": " + e.what());
+    }
+    if (!loadVideoFrame(o, k, p, o.videoStart, channels))
+      throw std::invalid_argument("object " + std::to_string(k + 1) + ": video start " + std::to_string(o.videoStart) +
+                                  " is past the end of " + o.video);
+    return p;
+  }
   const cv::Mat img = cv::imread(o.image, channels == 1 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
   if (img.empty()) throw std::runtime_error("cannot read texture image '" + o.image + "'");
   const int w = o.cropW > 0 ? o.cropW : img.cols - o.cropX, h = o.cropH > 0 ? o.cropH : img.rows - o.cropY;
@@ -78,8 +125,9 @@ void placement(const TCompositeObject& o, std::size_t i, std::size_t last, const
   Vec2 from = o.from, to = o.to;
   if (!from.allFinite())
   {
-    from = Vec2(0.0, 0.5 * (image.height - 1));
-    to = Vec2(image.width - 1.0, from.y());
+    // A still texture crosses the image; a video object already moves: it stays centred.
+    from = o.video.empty() ? Vec2(0.0, 0.5 * (image.height - 1)) : Vec2(0.5 * (image.width - 1), 0.5 * (image.height - 1));
+    to = o.video.empty() ? Vec2(image.width - 1.0, from.y()) : from;
   }
   const Vec2 d = to - from;
   const Vec2 n = d.norm() > 0 ? Vec2(-d.y() / d.norm(), d.x() / d.norm()) : Vec2(0, 1);
@@ -151,7 +199,8 @@ TCompositeStats compositeMovingObjects(const std::string& sourceFolder, const st
       Vec2 c;
       double s = 1;
       placement(o, i, last, frame.size(), c, s);
-      const TPrepared& p = prepared[k];
+      TPrepared& p = prepared[k];
+      if (p.video && !loadVideoFrame(o, k, p, o.videoStart + (i - o.firstFrame), channels)) continue;
       // Texture pixel (x, y) (centres at integers) goes to image pixel s (x - (w-1)/2) + c.
       const cv::Matx23d A(s, 0, c.x() - s * 0.5 * (p.texture.cols - 1), 0, s, c.y() - s * 0.5 * (p.texture.rows - 1));
       cv::Mat tex, alpha;
@@ -197,12 +246,16 @@ TCompositeStats compositeMovingObjects(const std::string& sourceFolder, const st
 
 std::string compositeAppUsage()
 {
-  return "Usage: imm-composite SOURCE_FOLDER OUT_FOLDER --object IMAGE [object options] [--object IMAGE ...]\n"
+  return "Usage: imm-composite SOURCE_FOLDER OUT_FOLDER (--object IMAGE | --object-video FOLDER) [object options] ...\n"
          "Pastes moving objects cut from real images into a dataset folder (a real camera's sequence) and\n"
          "writes the result with the truth: rgb/ rgb.txt calib.txt [groundtruth.txt] masks/ (0 static\n"
          "world, k moving object k) objects.txt (centre pixel and scale per frame).\n"
-         "Object options (apply to the last --object):\n"
-         "  --crop X,Y,W,H          part of IMAGE to use (default: all); the object is the ellipse inscribed in it\n"
+         "  --object IMAGE          a still texture; the object is the ellipse inscribed in its crop\n"
+         "  --object-video FOLDER   what moves in another video: a dataset folder with masks/ (a still\n"
+         "                          camera's video through imm-rotate); its frame k pasted where its mask is\n"
+         "Object options (apply to the last object):\n"
+         "  --crop X,Y,W,H          part of IMAGE (or of the video's frames) to use (default: all)\n"
+         "  --video-start N         first frame of the video object used (default 0)\n"
          "  --scale S | S0,S1       texture-to-image scale, constant or changing linearly over the span\n"
          "  --path U0,V0,U1,V1      centre pixel at the first and last frame of the span (default: left\n"
          "                          edge to right edge at mid-height)\n"
@@ -254,13 +307,13 @@ int runCompositeApp(const std::vector<std::string>& args, std::ostream& out, std
     }
     if (i + 1 >= args.size()) return usageError(a + " needs a value");
     const std::string v = args[++i];
-    if (a == "--object")
+    if (a == "--object" || a == "--object-video")
     {
       objects.emplace_back();
-      objects.back().image = v;
+      (a == "--object" ? objects.back().image : objects.back().video) = v;
       continue;
     }
-    if (objects.empty()) return usageError(a + " before any --object");
+    if (objects.empty()) return usageError(a + " before any --object or --object-video");
     TCompositeObject& o = objects.back();
     std::vector<double> x;
     if (a == "--crop")
@@ -291,6 +344,13 @@ int runCompositeApp(const std::vector<std::string>& args, std::ostream& out, std
         return usageError("--span needs A,B (integers, 0 <= A <= B), got '" + v + "'");
       o.firstFrame = static_cast<std::size_t>(x[0]), o.lastFrame = static_cast<std::size_t>(x[1]);
     }
+    else if (a == "--video-start")
+    {
+      if (!parseNumbers(v, 1, x) || x[0] < 0 || x[0] != std::floor(x[0]))
+        return usageError("--video-start needs a frame index >= 0, got '" + v + "'");
+      if (o.video.empty()) return usageError("--video-start applies to an --object-video");
+      o.videoStart = static_cast<std::size_t>(x[0]);
+    }
     else if (a == "--wave")
     {
       if (!parseNumbers(v, 2, x) || !(x[1] > 0)) return usageError("--wave needs AMP,PERIOD (period > 0), got '" + v + "'");
@@ -300,7 +360,7 @@ int runCompositeApp(const std::vector<std::string>& args, std::ostream& out, std
       return usageError("unknown option '" + a + "'");
   }
   if (positional.size() != 2) return usageError("expected SOURCE_FOLDER and OUT_FOLDER");
-  if (objects.empty()) return usageError("give at least one --object IMAGE");
+  if (objects.empty()) return usageError("give at least one --object IMAGE or --object-video FOLDER");
   try
   {
     const TCompositeStats s = compositeMovingObjects(positional[0], positional[1], objects);

@@ -1167,6 +1167,78 @@ TEST(SimRotate, VideoFilesCommandLineAndBadInputNameTheProblem)
   EXPECT_NE(m.find("is the source folder"), std::string::npos) << m;
 }
 
+TEST(SimComposite, VideoObjectIsPastedWhereItsMasksAreUntilItsVideoEnds)
+{
+  // A still camera's video (TStillScene: a textured square moving over a textured world) through
+  // imm-rotate at rest gives the masks; its moving square is pasted into a rendered sequence.
+  TTempDir still("composite_video_still"), obj("composite_video_obj"), src("composite_video_src"), dst("composite_video_dst");
+  const TStillScene scene;
+  scene.write(still.path);
+  TRotatedViewOptions ro;
+  ro.panDeg = ro.tiltDeg = ro.rollDeg = 0;
+  ro.width = TStillScene::kW, ro.height = TStillScene::kH;
+  ro.dilatePx = 0;
+  rotateStillVideo(still.path.string(), obj.path.string(), ro);
+  std::ostringstream out, err;
+  ASSERT_EQ(runRenderApp({scenarioPath("default"), src.path.string(), "--frames", "50", "--set", "render.noise_sigma_grey=0"}, out, err), 0)
+      << err.str();
+  TCompositeObject o;
+  o.video = obj.path.string();
+  o.videoStart = 5;
+  o.firstFrame = 10;
+  const TCompositeStats st = compositeMovingObjects(src.path.string(), dst.path.string(), {o});
+  EXPECT_EQ(st.frames, 50u);
+  // Video frames 5..39 go to output frames 10..44; then the video has ended.
+  EXPECT_EQ(st.objectFrames, 35u);
+  const auto cam = camera::loadCalibFile((src.path / "calib.txt").string());
+  // The video frame's centre sits at the image centre, scale 1: output (x, y) shows video pixel
+  // (x, y) - c_out + c_video.
+  const double du = 0.5 * (TStillScene::kW - 1) - 0.5 * (cam->width() - 1), dv = 0.5 * (TStillScene::kH - 1) - 0.5 * (cam->height() - 1);
+  for (int i : {10, 20, 44, 45})
+  {
+    char name[32];
+    std::snprintf(name, sizeof(name), "%06d.png", i);
+    const cv::Mat img = cv::imread((dst.path / "rgb" / name).string(), cv::IMREAD_GRAYSCALE);
+    const cv::Mat mask = cv::imread((dst.path / "masks" / name).string(), cv::IMREAD_UNCHANGED);
+    if (i == 45)
+    {
+      EXPECT_EQ(cv::countNonZero(mask), 0) << "the video has ended";
+      continue;
+    }
+    const cv::Mat videoFrame = scene.frame(5 + (i - 10));
+    const cv::Rect sq(scene.squareAt(5 + (i - 10)), scene.square.size());
+    int inside = 0, outsideMarked = 0;
+    for (int y = 0; y < img.rows; ++y)
+      for (int x = 0; x < img.cols; ++x)
+      {
+        const int vx = static_cast<int>(std::lround(x + du)), vy = static_cast<int>(std::lround(y + dv));
+        const bool inner = vx >= sq.x + 2 && vx < sq.br().x - 2 && vy >= sq.y + 2 && vy < sq.br().y - 2;
+        const bool near = vx >= sq.x - 12 && vx < sq.br().x + 12 && vy >= sq.y - 12 && vy < sq.br().y + 12;
+        if (inner && vx >= 0 && vy >= 0 && vx < TStillScene::kW && vy < TStillScene::kH)
+        {
+          ++inside;
+          EXPECT_EQ(mask.at<std::uint8_t>(y, x), 1);
+          EXPECT_NEAR(img.at<std::uint8_t>(y, x), videoFrame.at<std::uint8_t>(vy, vx), 2) << "frame " << i;
+        }
+        else if (!near)
+          outsideMarked += mask.at<std::uint8_t>(y, x) != 0;
+      }
+    EXPECT_GT(inside, 100) << "frame " << i;
+    EXPECT_EQ(outsideMarked, 0) << "frame " << i;
+  }
+  // A video object needs masks/; the command line names the option and the folder.
+  TTempDir bare("composite_video_bare");
+  scene.write(bare.path);
+  std::ostringstream o2, e2;
+  EXPECT_EQ(runCompositeApp({src.path.string(), dst.path.string() + "2", "--object-video", bare.path.string()}, o2, e2), 1);
+  EXPECT_NE(e2.str().find("masks"), std::string::npos) << e2.str();
+  std::ostringstream o3, e3;
+  EXPECT_EQ(runCompositeApp({src.path.string(), dst.path.string() + "3", "--object", "x.png", "--video-start", "3"}, o3, e3), 2);
+  EXPECT_NE(e3.str().find("--object-video"), std::string::npos) << e3.str();
+  fs::remove_all(dst.path.string() + "2");
+  fs::remove_all(dst.path.string() + "3");
+}
+
 // ---------------------------------------------------------------------------------------------
 // Speed (reported, never asserted)
 // ---------------------------------------------------------------------------------------------

@@ -3,8 +3,9 @@
  * The shadow filter's claims (MonoSLAMBOT, Figs. 4-5) need real video of something moving in front
  * of a moving camera, with the truth of which pixels move. compositeMovingObjects() makes such a
  * sequence from any dataset folder: the real camera motion, background, noise and blur stay; one or
- * more textured objects cut from real images (an elliptical cut-out with a feathered edge) move
- * across the image on a scripted 2D path, independently of the camera, and every frame gets the
+ * more textured objects cut from real images (an elliptical cut-out with a feathered edge), or real
+ * moving things cut from another real video by its masks (a hand moving a box, filmed by a still
+ * camera), move across the image on a scripted 2D path, independently of the camera, and every frame gets the
  * object mask in the renderer's format (masks/NAME: 0 static world, k moving object k), so
  * `slam-eval classification --masks` scores the decisions and the same sequence without the objects
  * is the reference trajectory (doc/shadow.md, "Real video with a pasted moving object"). */
@@ -23,7 +24,13 @@ namespace immslam::sim
 /** One pasted object: a texture, its path in the image and the frames it is present. */
 struct TCompositeObject
 {
-  std::string image;        ///< texture file (any image OpenCV reads)
+  std::string image;        ///< texture file (any image OpenCV reads); unused for a video object
+  /** A video object instead of a still texture: a dataset folder with masks/ (e.g. a still camera's
+   * video written by imm-rotate), of which frame `videoStart + (i - firstFrame)` is pasted in output
+   * frame i, its pixels where its mask is non-zero (closed over 9 px so that parts of the object that
+   * matched the background are kept, edge feathered); the object leaves when the video ends. */
+  std::string video;
+  std::size_t videoStart = 0;  ///< first frame of the video used
   int cropX = 0;            ///< crop of the texture: left column
   int cropY = 0;            ///< top row
   int cropW = 0;            ///< width (0 = to the right edge)
@@ -31,7 +38,8 @@ struct TCompositeObject
   double scaleFirst = 1.0;  ///< texture-to-image scale at the first frame of the span
   double scaleLast = 1.0;   ///< ... at the last frame (linear in between: an object approaching)
   /** Centre pixel at the first and last frame of the span (linear in between; may lie off the
-   * image, then the object enters or leaves). NaN = from the left edge to the right edge, mid-height. */
+   * image, then the object enters or leaves). NaN = from the left edge to the right edge, mid-height
+   * (a video object: fixed at the image centre). */
   Vec2 from = Vec2::Constant(std::numeric_limits<double>::quiet_NaN());
   Vec2 to = Vec2::Constant(std::numeric_limits<double>::quiet_NaN());  ///< see from
   std::size_t firstFrame = 0;  ///< span: first output frame (0-based) the object is in
@@ -61,7 +69,7 @@ struct TCompositeStats
 TCompositeStats compositeMovingObjects(const std::string& sourceFolder, const std::string& outFolder,
                                        const std::vector<TCompositeObject>& objects);
 
-/** `imm-composite SOURCE_FOLDER OUT_FOLDER --object IMAGE [object options]... [--help]`.
+/** `imm-composite SOURCE_FOLDER OUT_FOLDER (--object IMAGE | --object-video FOLDER) [object options]... [--help]`.
  * \return 0 on success, 1 on bad input or failure (the message names the file), 2 on bad usage. */
 int runCompositeApp(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
