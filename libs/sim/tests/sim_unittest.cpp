@@ -85,6 +85,16 @@ struct TTempDir
   ~TTempDir() { fs::remove_all(path); }
 };
 
+/** Exit status of an app's run function on args; its error output in `message`. */
+int exitCode(int (*app)(const std::vector<std::string>&, std::ostream&, std::ostream&), const std::vector<std::string>& args,
+             std::string& message)
+{
+  std::ostringstream o, e;
+  const int rc = app(args, o, e);
+  message = e.str();
+  return rc;
+}
+
 std::vector<std::string> dataLines(const fs::path& p)
 {
   std::ifstream f(p);
@@ -887,12 +897,7 @@ TEST(SimComposite, CommandLineAndBadInputNameTheProblem)
   EXPECT_NE(o1.str().find("wrote 2 frames"), std::string::npos) << o1.str();
   EXPECT_NE(o1.str().find("1 unreadable source frames skipped"), std::string::npos) << o1.str();
 
-  const auto code = [&](const std::vector<std::string>& args, std::string& message) {
-    std::ostringstream o, e;
-    const int rc = runCompositeApp(args, o, e);
-    message = e.str();
-    return rc;
-  };
+  const auto code = [](const std::vector<std::string>& args, std::string& message) { return exitCode(runCompositeApp, args, message); };
   std::string m;
   EXPECT_EQ(code({"--help"}, m), 0);
   EXPECT_EQ(code({s, d}, m), 2);
@@ -1135,12 +1140,7 @@ TEST(SimRotate, VideoFilesCommandLineAndBadInputNameTheProblem)
       << "a colour source gives colour frames";
   EXPECT_TRUE(fs::exists(dst.path / "masks" / "000003.png"));
 
-  const auto code = [&](const std::vector<std::string>& args, std::string& message) {
-    std::ostringstream o, e;
-    const int rc = runRotateApp(args, o, e);
-    message = e.str();
-    return rc;
-  };
+  const auto code = [](const std::vector<std::string>& args, std::string& message) { return exitCode(runRotateApp, args, message); };
   std::string m;
   EXPECT_EQ(code({"--help"}, m), 0);
   EXPECT_EQ(code({video}, m), 2);
