@@ -148,6 +148,9 @@ cv::Mat stableBackground(const std::string& source, const TRotatedViewOptions& o
     }
     if (!window.empty() && f.grey.size() != window.front().size()) continue;  // (checked when written)
     window.push_back(f.grey.clone());
+    // Each frame is counted once: the first kLag (no past to test) as they come, the others when
+    // they are the window's centre, the last kLag (no future) after the loop.
+    if (n < static_cast<std::size_t>(kLag)) accumulate(window.back(), false, window.back(), window.back());
     if (window.size() == 2 * kLag + 1)
     {
       accumulate(window[kLag], true, window.front(), window.back());
@@ -155,9 +158,10 @@ cv::Mat stableBackground(const std::string& source, const TRotatedViewOptions& o
     }
     ++n;
   }
-  if (window.empty() && count.empty()) throw std::runtime_error("no readable frame in " + source);
-  // Frames too close to the ends for the stability test still count in the plain histogram.
-  for (const cv::Mat& g : window) accumulate(g, false, g, g);
+  if (window.empty()) throw std::runtime_error("no readable frame in " + source);
+  const std::size_t firstLeft = std::max<std::size_t>(kLag, n >= static_cast<std::size_t>(kLag) ? n - kLag : 0);
+  for (std::size_t k = 0; k < window.size(); ++k)
+    if (n - window.size() + k >= firstLeft) accumulate(window[k], false, window[k], window[k]);
   const cv::Size size = window.back().size();
   cv::Mat bg(size, CV_8UC1);
   for (int y = 0; y < size.height; ++y)
