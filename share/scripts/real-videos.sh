@@ -38,7 +38,8 @@ make_seq vtest-still "$VTEST" "$OUT/vtest_calib.txt" 0,0,0 768,576
 make_seq vtest-rotating "$VTEST" "$OUT/vtest_calib.txt" 3,2,1.5
 
 field() { grep -m1 "$1" | sed 's/.*: *//' | awk '{print $1}'; }
-printf '%-15s %-12s %-9s %-10s %-9s %-9s %-7s %-14s %s\n' sequence config rot_deg transl/d segment% dynamic static moving->static static->dynamic
+printf '%-15s %-12s %-9s %-10s %-9s %-9s %-7s %-14s %s\n' sequence config rot_deg transl/d segment% dynamic static \
+  'moving->static' 'static->dynamic'
 for seq in box-still box-rotating vtest-still vtest-rotating; do
   for cfg in imm7-shadow imm7 single single-shadow; do
     o="$OUT/out-$seq-$cfg"
@@ -70,7 +71,7 @@ TS=../shared/data/monoslam_testseq
 if [ -d "$TS" ]; then
   clean="$OUT/out-testseq-clean"
   "$BUILD/bin/imm-monoslam" ini/imm7-shadow.ini "$TS" --out "$clean" --no-gui --quiet --set output.plots=false > /dev/null
-  printf '\n%-22s %-12s %-12s %-14s %s\n' composite config dev%path moving->static static->dynamic
+  printf '\n%-22s %-12s %-12s %-14s %s\n' composite config dev%path 'moving->static' 'static->dynamic'
   for v in "100 554 0.5 0" "300 754 0.45 0" "500 954 0.55 0" "0 354 0.5 100" "600 999 0.5 50"; do
     set -- $v
     seq="ts-hand-$1-$3"
