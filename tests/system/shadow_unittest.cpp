@@ -346,6 +346,17 @@ TEST(ShadowSystem, RealVideoOfAHandMovingABoxInFrontOfAStillCamera)
   const TRealVideoRun full = runRealVideo("imm7-shadow", folder);
   const TRealVideoRun noShadow = runRealVideo("imm7", folder);
   const TRealVideoRun single = runRealVideo("single", folder);
+  {
+    // The video given directly as INPUT is the same stream as the folder imm-rotate wrote at rest
+    // (identity remap, lossless PNG, the container's frame rate): the same trajectory, to the byte.
+    const auto out = outDir("realvideo_box_direct");
+    ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", video, "--calib", folder + "_calib/calib.txt", "--out", out,
+                      "--set", "output.plots=false"}),
+              0);
+    const std::string direct = readFile(out + "/trajectory.txt");
+    EXPECT_GT(direct.size(), 1000u);
+    EXPECT_EQ(direct, readFile(folder + "_imm7-shadow/trajectory.txt"));  // runRealVideo's output folder
+  }
   // Measured: rotation RMSE 1.97 / 0.27 / 34.9 deg; stationary 82 % / 33 % of the frames (the IMM
   // without shadow filter explains the box with general motion and a map at infinity); 82 dynamic and
   // 2 static decisions, moving->static 2 of 73 against the masks.

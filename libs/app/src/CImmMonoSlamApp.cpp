@@ -30,8 +30,9 @@ std::string CImmMonoSlamApp::usage()
 {
   return "Usage: imm-monoslam CONFIG.ini [INPUT] [options]\n"
          "  IMM monocular EKF SLAM (+ MonoSLAMBOT shadow filter) on a rawlog, a dataset folder,\n"
-         "  a live MRPT camera, or the built-in rendered scene.\n"
-         "  INPUT                   a .rawlog file or a dataset folder (rgb.txt, calib.txt, ...);\n"
+         "  a video file, a live MRPT camera, or the built-in rendered scene.\n"
+         "  INPUT                   a .rawlog file, a dataset folder (rgb.txt, calib.txt, ...) or a\n"
+         "                          video file (.mp4 .avi .mkv .mov ...; needs --calib);\n"
          "                          default: [input] source of the config\n"
          "Options:\n"
          "  --out DIR               output folder (default imm-monoslam-out)\n"

@@ -6,6 +6,7 @@
 #include <immslam/io/CDatasetFolderSource.h>
 #include <immslam/io/CDatasetWriter.h>
 #include <immslam/io/CRawlogSource.h>
+#include <immslam/io/CVideoFileSource.h>
 #include <immslam/io/dataset2rawlog.h>
 
 #include <mrpt/core/Clock.h>
@@ -20,6 +21,7 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 #include <zlib.h>
 
 #include <chrono>
@@ -840,4 +842,65 @@ TEST(OpenImageSource, ChoosesByPathKind)
   EXPECT_NE(dynamic_cast<CRawlogSource*>(b.get()), nullptr);
   EXPECT_EQ(b->sizeHint(), 2u);
   EXPECT_NE(b->describe().find("rawlog"), std::string::npos);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Video files
+// ---------------------------------------------------------------------------------------------
+TEST(VideoFile, FramesTimestampsAndColourOfAVideoOpenedByItsExtension)
+{
+  TempDir d;
+  const std::string path = d / "clip.AVI";  // the extension decides, in any case
+  {
+    cv::VideoWriter w(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25.0, {64, 48}, true);
+    ASSERT_TRUE(w.isOpened());
+    for (int i = 0; i < 7; ++i) w.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar(20 * i, 100, 200 - 20 * i)));
+  }
+  EXPECT_TRUE(isVideoFile(path));
+  EXPECT_TRUE(isVideoFile("a/b/c.mp4"));
+  EXPECT_FALSE(isVideoFile("a/b/c.rawlog"));
+  EXPECT_FALSE(isVideoFile("a/b/mp4"));
+  const auto src = openImageSource(path);
+  ASSERT_NE(dynamic_cast<CVideoFileSource*>(src.get()), nullptr);
+  EXPECT_EQ(src->calibration(), nullptr) << "a video carries no calibration";
+  EXPECT_NE(src->describe().find(path), std::string::npos) << src->describe();
+  EXPECT_EQ(src->sizeHint(), 7u);
+  const TStream s = drain(*src);
+  ASSERT_EQ(s.frames.size(), 7u);
+  EXPECT_TRUE(s.skipped.empty());
+  EXPECT_EQ(s.endWhy, "");
+  for (std::size_t i = 0; i < s.frames.size(); ++i)
+  {
+    EXPECT_EQ(s.frames[i].index, i);
+    EXPECT_NEAR(s.frames[i].timestamp, i / 25.0, 1e-9);
+    EXPECT_EQ(s.frames[i].grey.type(), CV_8UC1);
+    EXPECT_EQ(s.frames[i].colour.type(), CV_8UC3);
+    EXPECT_EQ(s.frames[i].grey.cols, 64);
+  }
+  // A given frame rate overrides the container's.
+  CVideoFileSource at10(path, 10.0);
+  TFrame f;
+  std::string why;
+  ASSERT_EQ(at10.next(f, why), ENextStatus::Frame);
+  ASSERT_EQ(at10.next(f, why), ENextStatus::Frame);
+  EXPECT_NEAR(f.timestamp, 0.1, 1e-12);
+}
+
+TEST(VideoFile, MissingOrUndecodableVideoIsAnErrorNamingIt)
+{
+  TempDir d;
+  const std::string bad = d / "notes.mp4";
+  std::ofstream(bad) << "not a video\n";
+  for (const std::string& p : {bad, d / "missing.mkv"})
+  {
+    try
+    {
+      openImageSource(p);
+      ADD_FAILURE() << "no exception for " << p;
+    }
+    catch (const std::runtime_error& e)
+    {
+      EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what();
+    }
+  }
 }

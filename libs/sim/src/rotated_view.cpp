@@ -2,12 +2,12 @@
 #include <immslam/camera/CPinholeCamera.h>
 #include <immslam/io/CDatasetWriter.h>
 #include <immslam/io/CImageSource.h>
+#include <immslam/io/CVideoFileSource.h>
 #include <immslam/math/quaternion.h>
 #include <immslam/sim/rotated_view.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -29,72 +29,27 @@ namespace
 {
 constexpr double kPi = 3.14159265358979323846;
 
-/** Frames of a dataset folder or rawlog (io::CImageSource) or of a video file (OpenCV). */
-class CFrameReader
+/** Opens a dataset folder, a rawlog or a video file (frame rate `fps` for a video; 0 = its own). */
+io::CImageSource::Ptr openSource(const std::string& source, double fps)
 {
- public:
-  CFrameReader(const std::string& source, double fps) : m_source(source)
-  {
-    std::error_code ec;
-    const bool isDir = fs::is_directory(source, ec);
-    if (!fs::exists(source, ec)) throw std::runtime_error("source not found: " + source);
-    const std::string ext = fs::path(source).extension().string();
-    if (isDir || ext == ".rawlog" || ext == ".gz")
-    {
-      m_images = io::openImageSource(source);
-      return;
-    }
-    m_video = std::make_unique<cv::VideoCapture>(source);
-    if (!m_video->isOpened())
-      throw std::runtime_error("cannot open " + source + " as a dataset folder, a rawlog or a video OpenCV decodes");
-    m_fps = fps > 0 ? fps : m_video->get(cv::CAP_PROP_FPS);
-    if (!(m_fps > 0 && m_fps < 1000)) m_fps = 30.0;
-  }
+  std::error_code ec;
+  if (!fs::exists(source, ec)) throw std::runtime_error("source not found: " + source);
+  if (!fs::is_directory(source, ec) && io::isVideoFile(source)) return std::make_unique<io::CVideoFileSource>(source, fps);
+  return io::openImageSource(source);
+}
 
-  /** Next frame (colour when the source has colour); false at the end. Unreadable entries are
-   * counted in `skipped`. */
-  bool next(io::TFrame& f, std::size_t& skipped)
+/** Next frame of `src`; unreadable entries are skipped and counted. False at the end. */
+bool nextFrame(io::CImageSource& src, io::TFrame& f, std::size_t& skipped)
+{
+  for (;;)
   {
-    if (m_video)
-    {
-      cv::Mat img;
-      if (!m_video->read(img) || img.empty()) return false;
-      f = io::TFrame();
-      f.index = m_index;
-      f.timestamp = static_cast<double>(m_index) / m_fps;
-      ++m_index;
-      if (img.channels() == 3)
-      {
-        f.colour = img;
-        cv::cvtColor(img, f.grey, cv::COLOR_BGR2GRAY);
-      }
-      else
-        f.grey = img;
-      return true;
-    }
-    for (;;)
-    {
-      std::string why;
-      const io::ENextStatus s = m_images->next(f, why);
-      if (s == io::ENextStatus::Frame) return true;
-      if (s == io::ENextStatus::End) return false;
-      ++skipped;
-    }
+    std::string why;
+    const io::ENextStatus s = src.next(f, why);
+    if (s == io::ENextStatus::Frame) return true;
+    if (s == io::ENextStatus::End) return false;
+    ++skipped;
   }
-
-  camera::CCameraModel::Ptr calibration() const { return m_images ? m_images->calibration() : nullptr; }
-  std::optional<eval::TTrajectory> groundTruth() const
-  {
-    return m_images ? m_images->groundTruth() : std::optional<eval::TTrajectory>();
-  }
-
- private:
-  std::string m_source;
-  io::CImageSource::Ptr m_images;
-  std::unique_ptr<cv::VideoCapture> m_video;
-  double m_fps = 30.0;
-  std::size_t m_index = 0;
-};
+}
 
 void validate(const TRotatedViewOptions& o)
 {
@@ -117,7 +72,7 @@ void validate(const TRotatedViewOptions& o)
 cv::Mat stableBackground(const std::string& source, const TRotatedViewOptions& o)
 {
   constexpr int kLag = 3, kStable = 6, kBins = 32;
-  CFrameReader rd(source, o.fps);
+  const io::CImageSource::Ptr rd = openSource(source, o.fps);
   std::vector<cv::Mat> window;  // the last 2 kLag + 1 grey frames
   cv::Mat count, sum, countAll, sumAll;  // per pixel x bin: CV_32S counts, CV_32F sums
   std::size_t n = 0, skipped = 0;
@@ -138,7 +93,7 @@ cv::Mat stableBackground(const std::string& source, const TRotatedViewOptions& o
         }
       }
   };
-  while ((o.maxFrames == 0 || n < o.maxFrames) && rd.next(f, skipped))
+  while ((o.maxFrames == 0 || n < o.maxFrames) && nextFrame(*rd, f, skipped))
   {
     if (count.empty())
     {
@@ -233,10 +188,10 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
     if (fs::exists(outFolder, ec) && fs::equivalent(source, outFolder, ec))
       throw std::runtime_error("the output folder " + outFolder + " is the source folder");
   }
-  CFrameReader reader(source, o.fps);
-  camera::CCameraModel::Ptr src = o.calibFile.empty() ? reader.calibration() : camera::loadCalibFile(o.calibFile);
+  const io::CImageSource::Ptr reader = openSource(source, o.fps);
+  camera::CCameraModel::Ptr src = o.calibFile.empty() ? reader->calibration() : camera::loadCalibFile(o.calibFile);
   if (!src) throw std::runtime_error(source + " has no calibration: give --calib FILE (calib.txt format)");
-  const auto sourceGt = reader.groundTruth();
+  const auto sourceGt = reader->groundTruth();
   const int W = o.width > 0 ? o.width : 2 * static_cast<int>(std::lround(0.4 * src->width()));
   const int H = o.height > 0 ? o.height : 2 * static_cast<int>(std::lround(0.4 * src->height()));
   if (W > src->width() || H > src->height())
@@ -277,7 +232,7 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
   io::TFrame fr;
   std::size_t n = 0;
   double movingSum = 0;
-  while ((o.maxFrames == 0 || n < o.maxFrames) && reader.next(fr, st.skipped))
+  while ((o.maxFrames == 0 || n < o.maxFrames) && nextFrame(*reader, fr, st.skipped))
   {
     if (fr.grey.cols != src->width() || fr.grey.rows != src->height())
       throw std::runtime_error(source + ": frame " + std::to_string(fr.index) + " is " + std::to_string(fr.grey.cols) +

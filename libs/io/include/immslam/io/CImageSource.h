@@ -71,7 +71,8 @@ class CImageSource
   virtual bool endedOnDamage() const { return false; }
 };
 
-/** Opens a dataset folder (../shared/data/README.md format) or a .rawlog file (either MRPT layout),
- * chosen by what `path` is. \throws std::runtime_error naming the path if it is neither/unreadable. */
+/** Opens a dataset folder (../shared/data/README.md format), a video file (CVideoFileSource, by its
+ * extension: isVideoFile()) or a .rawlog file (either MRPT layout; any other file), chosen by what
+ * `path` is. \throws std::runtime_error naming the path if it is none of them or unreadable. */
 CImageSource::Ptr openImageSource(const std::string& path);
 }  // namespace immslam::io
