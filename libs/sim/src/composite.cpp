@@ -3,6 +3,8 @@
 #include <immslam/io/CDatasetWriter.h>
 #include <immslam/sim/composite.h>
 
+#include "number_list.h"
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -32,6 +34,19 @@ struct TPrepared
   std::shared_ptr<io::CDatasetFolderSource> video;  ///< a video object's frames (texture/alpha per frame)
 };
 
+/** The object's crop of an image (`name` for messages).
+ * \throws std::invalid_argument if it is not inside the image or smaller than 4x4 px. */
+cv::Rect cropOf(const TCompositeObject& o, std::size_t k, const cv::Mat& img, const std::string& name)
+{
+  const int w = o.cropW > 0 ? o.cropW : img.cols - o.cropX, h = o.cropH > 0 ? o.cropH : img.rows - o.cropY;
+  if (w < 4 || h < 4 || o.cropX + w > img.cols || o.cropY + h > img.rows)
+    throw std::invalid_argument("object " + std::to_string(k + 1) + ": crop " + std::to_string(o.cropX) + "," +
+                                std::to_string(o.cropY) + "," + std::to_string(w) + "," + std::to_string(h) +
+                                " is not inside '" + name + "' (" + std::to_string(img.cols) + "x" +
+                                std::to_string(img.rows) + ", at least 4x4 px)");
+  return cv::Rect(o.cropX, o.cropY, w, h);
+}
+
 /** Texture and alpha of a video object's frame j (false once the video has ended). The alpha is the
  * frame's mask, closed (a 9 px disc: parts of the object whose grey level matched the background
  * are kept) and feathered (Gaussian, 0.7 px). */
@@ -48,11 +63,7 @@ bool loadVideoFrame(const TCompositeObject& o, std::size_t k, TPrepared& p, std:
   if (mask.empty() || mask.size() != img.size())
     throw std::runtime_error("object " + std::to_string(k + 1) + ": no mask of the frame's size at '" + maskPath +
                              "' (a video object needs masks/, e.g. from imm-rotate)");
-  const int w = o.cropW > 0 ? o.cropW : img.cols - o.cropX, h = o.cropH > 0 ? o.cropH : img.rows - o.cropY;
-  if (w < 4 || h < 4 || o.cropX + w > img.cols || o.cropY + h > img.rows)
-    throw std::invalid_argument("object " + std::to_string(k + 1) + ": crop is not inside the video's " +
-                                std::to_string(img.cols) + "x" + std::to_string(img.rows) + " frames");
-  const cv::Rect r(o.cropX, o.cropY, w, h);
+  const cv::Rect r = cropOf(o, k, img, o.video);
   img(r).convertTo(p.texture, channels == 1 ? CV_32FC1 : CV_32FC3);
   cv::Mat m = mask(r) > 0;
   cv::morphologyEx(m, m, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, {19, 19}));
@@ -94,14 +105,10 @@ TPrepared prepare(const TCompositeObject& o, std::size_t k, int channels)
   }
   const cv::Mat img = cv::imread(o.image, channels == 1 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
   if (img.empty()) throw std::runtime_error("cannot read texture image '" + o.image + "'");
-  const int w = o.cropW > 0 ? o.cropW : img.cols - o.cropX, h = o.cropH > 0 ? o.cropH : img.rows - o.cropY;
-  if (w < 4 || h < 4 || o.cropX + w > img.cols || o.cropY + h > img.rows)
-    throw std::invalid_argument("object " + std::to_string(k + 1) + ": crop " + std::to_string(o.cropX) + "," +
-                                std::to_string(o.cropY) + "," + std::to_string(w) + "," + std::to_string(h) +
-                                " is not inside '" + o.image + "' (" + std::to_string(img.cols) + "x" +
-                                std::to_string(img.rows) + ", at least 4x4 px)");
+  const cv::Rect crop = cropOf(o, k, img, o.image);
+  const int w = crop.width, h = crop.height;
   TPrepared p;
-  img(cv::Rect(o.cropX, o.cropY, w, h)).convertTo(p.texture, channels == 1 ? CV_32FC1 : CV_32FC3);
+  img(crop).convertTo(p.texture, channels == 1 ? CV_32FC1 : CV_32FC3);
   // Elliptical silhouette inscribed in the crop, edge feathered over ~1.5 texture pixels centred on
   // the ellipse (a real object's edge is blurred by the optics, not a hard step; alpha 0.5 on it).
   p.alpha.create(h, w, CV_32FC1);
@@ -268,20 +275,6 @@ std::string compositeAppUsage()
 namespace
 {
 /** Parses exactly n comma-separated numbers; false on anything else. */
-bool parseNumbers(const std::string& s, std::size_t n, std::vector<double>& v)
-{
-  v.clear();
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
-  {
-    char* end = nullptr;
-    const double x = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || !std::isfinite(x)) return false;
-    v.push_back(x);
-  }
-  return v.size() == n;
-}
 }  // namespace
 
 int runCompositeApp(const std::vector<std::string>& args, std::ostream& out, std::ostream& err)

@@ -6,6 +6,8 @@
 #include <immslam/math/quaternion.h>
 #include <immslam/sim/rotated_view.h>
 
+#include "number_list.h"
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -160,23 +162,16 @@ cv::Mat movingMask(const cv::Mat& grey, const cv::Mat& background, const TRotate
   return mask;
 }
 
-bool parseNumber(const std::string& s, double& x)
-{
-  char* end = nullptr;
-  x = std::strtod(s.c_str(), &end);
-  return !s.empty() && *end == '\0' && std::isfinite(x);
-}
 }  // namespace
 
-std::vector<double> rotatedViewQuaternion(const TRotatedViewOptions& o, std::size_t i)
+Vec4 rotatedViewQuaternion(const TRotatedViewOptions& o, std::size_t i)
 {
   const double t = 2 * kPi * static_cast<double>(i) / o.periodFrames;
   const double deg = kPi / 180;
   const Vec4 qPan = math::quatFromRotationVector(Vec3(0, o.panDeg * deg * std::sin(t), 0));
   const Vec4 qTilt = math::quatFromRotationVector(Vec3(o.tiltDeg * deg * std::sin(t / 1.37), 0, 0));
   const Vec4 qRoll = math::quatFromRotationVector(Vec3(0, 0, o.rollDeg * deg * std::sin(t / 1.83)));
-  const Vec4 q = math::quatMultiply(math::quatMultiply(qPan, qTilt), qRoll);
-  return {q[0], q[1], q[2], q[3]};
+  return math::quatMultiply(math::quatMultiply(qPan, qTilt), qRoll);
 }
 
 TRotatedViewStats rotateStillVideo(const std::string& source, const std::string& outFolder,
@@ -229,6 +224,10 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
 
   TRotatedViewStats st;
   cv::Mat mapU(H, W, CV_32FC1), mapV(H, W, CV_32FC1);
+  // The virtual pixels' rays, once; each frame only rotates and projects them.
+  std::vector<Vec3> rays(static_cast<std::size_t>(W) * static_cast<std::size_t>(H));
+  for (int v = 0; v < H; ++v)
+    for (int u = 0; u < W; ++u) rays[static_cast<std::size_t>(v) * W + u] = virt.unproject(Vec2(u, v)).unitVector();
   io::TFrame fr;
   std::size_t n = 0;
   double movingSum = 0;
@@ -238,8 +237,7 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
       throw std::runtime_error(source + ": frame " + std::to_string(fr.index) + " is " + std::to_string(fr.grey.cols) +
                                "x" + std::to_string(fr.grey.rows) + ", the calibration " +
                                std::to_string(src->width()) + "x" + std::to_string(src->height()));
-    const auto qv = rotatedViewQuaternion(o, n);
-    const Vec4 q(qv[0], qv[1], qv[2], qv[3]);
+    const Vec4 q = rotatedViewQuaternion(o, n);
     const Mat3 R = math::quatToRotation(q);
     st.maxAngleDeg = std::max(st.maxAngleDeg, 2 * std::acos(std::min(1.0, std::abs(q[0]))) * 180 / kPi);
     // Each virtual pixel: its ray, rotated into the source camera, projected with the real lens.
@@ -248,7 +246,7 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
       for (int u = 0; u < W; ++u)
       {
         Vec2 uv;
-        const bool ok = src->project(R * virt.unproject(Vec2(u, v)).unitVector(), uv) && src->isInImage(uv);
+        const bool ok = src->project(R * rays[static_cast<std::size_t>(v) * W + u], uv) && src->isInImage(uv);
         mapU.at<float>(v, u) = ok ? static_cast<float>(uv.x()) : -1e4f;
         mapV.at<float>(v, u) = ok ? static_cast<float>(uv.y()) : -1e4f;
         outside += ok ? 0 : 1;
@@ -357,16 +355,7 @@ int runRotateApp(const std::vector<std::string>& args, std::ostream& out, std::o
       continue;
     }
     std::vector<double> x;
-    {
-      std::stringstream ss(v);
-      std::string item;
-      double d = 0;
-      while (std::getline(ss, item, ','))
-      {
-        if (!parseNumber(item, d)) return usageError(a + ": '" + v + "' is not a number list");
-        x.push_back(d);
-      }
-    }
+    if (!parseNumberList(v, x)) return usageError(a + ": '" + v + "' is not a number list");
     const auto isCount = [](double d) { return d >= 0 && d == std::floor(d) && d < 1e9; };
     if (a == "--size")
     {

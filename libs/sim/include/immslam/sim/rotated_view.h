@@ -19,6 +19,8 @@
  * they move in the image, which is what the classifier decides. */
 #pragma once
 
+#include <immslam/math/types.h>
+
 #include <cstddef>
 #include <iosfwd>
 #include <string>
@@ -58,7 +60,7 @@ struct TRotatedViewStats
 
 /** The virtual camera's orientation in the source camera's frame at frame i (R(0) = I), as a
  * quaternion [qw qx qy qz]; see TRotatedViewOptions for the script. */
-std::vector<double> rotatedViewQuaternion(const TRotatedViewOptions& o, std::size_t i);
+Vec4 rotatedViewQuaternion(const TRotatedViewOptions& o, std::size_t i);
 
 /** Reads `source` (a dataset folder, a .rawlog or a video file OpenCV decodes) and writes
  * `outFolder` (CDatasetWriter layout): rgb/ (colour when the source is), rgb.txt with the source
