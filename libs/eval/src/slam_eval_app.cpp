@@ -4,6 +4,8 @@
 #include <immslam/eval/classification_truth.h>
 #include <immslam/eval/TTrajectory.h>
 #include <immslam/eval/eval_app.h>
+#include <immslam/eval/reprojection.h>
+#include <immslam/camera/CCameraModel.h>
 #include <immslam/eval/search_nis.h>
 #include <immslam/eval/segmentation.h>
 #include <immslam/eval/slam_eval_app.h>
@@ -240,6 +242,73 @@ int runTracks(const std::string& prog, const std::vector<std::string>& args, std
   return 0;
 }
 
+std::string reprojectionUsage(const std::string& prog)
+{
+  return "Usage: " + prog + " searches.csv POSES.txt --calib calib.txt [--min-views N] [--min-per-pose N]\n"
+         "       [--max-dt S] [--refine OUT.txt] [--huber PX] [--iterations N]\n"
+         "How well a trajectory (an estimate or a ground truth, TUM format) explains the image\n"
+         "measurements the SLAM used (searches.csv rows with status inlier or rescued, written with\n"
+         "[output] search_log = true): every feature seen from N poses is triangulated from the\n"
+         "given poses and its reprojection error reported (undistorted pixels). A consistent\n"
+         "trajectory leaves about the matching noise on every feature; a biased one leaves a few\n"
+         "pixels on the features off the structure it was computed from.\n"
+         "  --calib F       the camera of the run (calib.txt format), required\n"
+         "  --min-views N   features measured from fewer poses are left out (default 8)\n"
+         "  --min-per-pose N  poses measuring fewer of those features are left out, with their\n"
+         "                  measurements: they do not determine the pose (default 6)\n"
+         "  --max-dt S      largest timestamp difference when joining rows to poses (default 0.0001)\n"
+         "  --refine OUT    then bundle-adjust poses and points from there (Levenberg-Marquardt,\n"
+         "                  Huber cost, first pose held) and write the refined trajectory (the poses\n"
+         "                  kept) to OUT: the best rigid explanation of the measurements near the\n"
+         "                  given one\n"
+         "  --huber PX      Huber threshold of the refinement (default 2)\n"
+         "  --iterations N  refinement iterations at most (default 100)\n";
+}
+
+int runReprojection(const std::string& prog, const std::vector<std::string>& args, std::ostream& out)
+{
+  const TParsed p = parse(args, 2, {"--calib", "--min-views", "--min-per-pose", "--max-dt", "--refine", "--huber", "--iterations"});
+  if (p.help) return out << reprojectionUsage(prog), 0;
+  requirePositional(p, 2, "searches.csv POSES.txt");
+  if (!p.value("--calib")) throw TUsageError("--calib is required (the camera of the run)");
+  const int minViews =
+      p.value("--min-views") ? static_cast<int>(parseNumber("--min-views", *p.value("--min-views"), 2, 1e9)) : 8;
+  const int minPerPose = p.value("--min-per-pose")
+                             ? static_cast<int>(parseNumber("--min-per-pose", *p.value("--min-per-pose"), 1, 1e9))
+                             : 6;
+  const double maxDt = p.value("--max-dt") ? parseNumber("--max-dt", *p.value("--max-dt"), 0, 1e9) : 1e-4;
+  TBundleOptions bo;
+  if (p.value("--huber")) bo.huberPx = parseNumber("--huber", *p.value("--huber"), 1e-3, 1e6);
+  if (p.value("--iterations"))
+    bo.maxIterations = static_cast<int>(parseNumber("--iterations", *p.value("--iterations"), 1, 1e6));
+  const auto cam = camera::loadCalibFile(*p.value("--calib"));
+  const auto rows = readSearchesCsv(p.positional[0]);
+  const TTrajectory poses = readTumTrajectory(p.positional[1]);
+  TBundleProblem prob;
+  try
+  {
+    prob = makeBundleProblem(rows, poses, *cam, maxDt, minViews, minPerPose);
+  }
+  catch (const std::runtime_error& e)
+  {
+    throw std::runtime_error(p.positional[0] + " with " + p.positional[1] + ": " + e.what());
+  }
+  out << "searches        : " << p.positional[0] << "\n"
+      << "poses           : " << p.positional[1] << " (" << poses.size() << ")\n"
+      << "-- triangulated from the given poses\n"
+      << reprojectionStats(prob).summary();
+  if (const auto refined = p.value("--refine"))
+  {
+    const TBundleResult r = bundleAdjust(prob, bo);
+    out << "-- after bundle adjustment (" << r.iterations << " iterations" << (r.converged ? ", converged" : "")
+        << "; robust cost per measurement " << r.initialCost << " -> " << r.finalCost << " px^2)\n"
+        << reprojectionStats(prob).summary();
+    writeTumTrajectory(prob.poses, *refined);
+    out << "refined poses   : " << *refined << "\n";
+  }
+  return 0;
+}
+
 int runNis(const std::string& prog, const std::vector<std::string>& args, std::ostream& out)
 {
   const TParsed p = parse(args, 2, {"--confidence"});
@@ -267,6 +336,8 @@ std::string slamEvalAppUsage(const std::string& prog)
          "  " + prog + " tracks tracks.csv (points_groundtruth.txt | RENDERED_FOLDER) --est EST.txt [--gt GT.txt]\n"
          "      position error of the tracked moving points after the camera's Sim(3) alignment\n"
          "  " + prog + " nis searches.csv: NIS of the matches used in the update vs chi-square(2)\n"
+         "  " + prog + " reprojection searches.csv POSES.txt --calib calib.txt [--refine OUT.txt]\n"
+         "      reprojection error of the SLAM's measurements given a trajectory; bundle adjustment\n"
          "  " + prog + " --help\n"
          "Exit status: 0 success, 1 bad input (the message names the file and line), 2 bad usage.\n";
 }
@@ -287,7 +358,8 @@ int runSlamEvalApp(const std::vector<std::string>& args, std::ostream& out, std:
     out << slamEvalAppUsage(prog);
     return 0;
   }
-  if (cmd == "ate" || (cmd != "segmentation" && cmd != "classification" && cmd != "tracks" && cmd != "nis"))
+  if (cmd == "ate" || (cmd != "segmentation" && cmd != "classification" && cmd != "tracks" && cmd != "nis" &&
+                        cmd != "reprojection"))
   {
     // ATE: the subcommand, or the old form (imm-eval) 'slam-eval EST.txt GT.txt ...'.
     std::vector<std::string> a{cmd == "ate" ? prog + " ate" : prog};
@@ -300,6 +372,7 @@ int runSlamEvalApp(const std::vector<std::string>& args, std::ostream& out, std:
     if (cmd == "segmentation") return runSegmentation(sub, args, out);
     if (cmd == "classification") return runClassification(sub, args, out);
     if (cmd == "tracks") return runTracks(sub, args, out, truth);
+    if (cmd == "reprojection") return runReprojection(sub, args, out);
     return runNis(sub, args, out);
   }
   catch (const TUsageError& e)
@@ -308,6 +381,7 @@ int runSlamEvalApp(const std::vector<std::string>& args, std::ostream& out, std:
         << (cmd == "segmentation"     ? segmentationUsage(sub)
             : cmd == "classification" ? classificationUsage(sub)
             : cmd == "tracks"         ? tracksUsage(sub)
+            : cmd == "reprojection"   ? reprojectionUsage(sub)
                                       : nisUsage(sub));
     return 2;
   }

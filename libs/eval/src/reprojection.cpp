@@ -1,0 +1,401 @@
+/* imm-monoslam — reprojection error of a trajectory against the measurements of searches.csv,
+ * and a bundle adjustment of them (Triggs et al., "Bundle Adjustment — A Modern Synthesis", 2000:
+ * Levenberg-Marquardt on the sparse normal equations, Huber weights by IRLS). */
+#include <immslam/camera/CCameraModel.h>
+#include <immslam/eval/reprojection.h>
+#include <immslam/eval/statistics.h>
+#include <immslam/math/quaternion.h>
+
+#include <Eigen/SVD>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace immslam::eval
+{
+namespace
+{
+struct TPoseCW
+{
+  Mat3 R;
+  Vec3 t;
+};
+
+TPoseCW cameraFromWorld(const TStampedPose& p)
+{
+  const Mat3 R_WC = math::quatToRotation(p.q_W_C);
+  return {R_WC.transpose(), -R_WC.transpose() * p.p_W_C};
+}
+
+void setFromCameraFromWorld(TStampedPose& p, const TPoseCW& c)
+{
+  const Mat3 R_WC = c.R.transpose();
+  p.p_W_C = -R_WC * c.t;
+  p.q_W_C = math::fromEigen(Eigen::Quaterniond(R_WC).normalized());
+}
+
+Mat3 expSO3(const Vec3& w) { return math::quatToRotation(math::quatFromRotationVector(w)); }
+
+double huberCost(double n, double k) { return n <= k ? n * n : 2 * k * n - k * k; }
+double huberWeight(double n, double k) { return n <= k ? 1.0 : k / n; }
+
+/** Index of the pose whose timestamp is nearest to t within maxDt, or -1. `order` sorts poses by
+ * time. */
+long nearestPose(const TTrajectory& poses, const std::vector<std::size_t>& order, double t, double maxDt)
+{
+  const auto it = std::lower_bound(order.begin(), order.end(), t,
+                                   [&](std::size_t i, double v) { return poses[i].timestamp < v; });
+  long best = -1;
+  double bestDt = maxDt;
+  for (auto j = it == order.begin() ? it : it - 1; j != order.end() && j <= it; ++j)
+  {
+    const double dt = std::abs(poses[*j].timestamp - t);
+    if (dt <= bestDt) best = static_cast<long>(*j), bestDt = dt;
+  }
+  return best;
+}
+
+/** Linear triangulation (DLT on normalized points), then Gauss-Newton on the reprojection error.
+ * Returns false if the point cannot be placed in front of its cameras. */
+bool triangulatePoint(const std::vector<TPoseCW>& cams, const std::vector<TBundleObservation>& obs,
+                      std::size_t first, std::size_t last, double fx, double fy, Vec3& X)
+{
+  const std::size_t n = last - first;
+  Eigen::MatrixXd A(2 * n, 4);
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    const auto& o = obs[first + k];
+    Eigen::Matrix<double, 3, 4> P;
+    P << cams[o.pose].R, cams[o.pose].t;
+    A.row(2 * k) = o.xn.x() * P.row(2) - P.row(0);
+    A.row(2 * k + 1) = o.xn.y() * P.row(2) - P.row(1);
+  }
+  const Eigen::Vector4d Xh = Eigen::JacobiSVD<Eigen::MatrixXd>(A, Eigen::ComputeFullV).matrixV().col(3);
+  // Scene size: the spread of the camera centres (a point is "far" at 1e4 times it).
+  Vec3 c0 = -cams[obs[first].pose].R.transpose() * cams[obs[first].pose].t;
+  double spread = 0;
+  for (std::size_t k = first; k < last; ++k)
+    spread = std::max(spread, (-cams[obs[k].pose].R.transpose() * cams[obs[k].pose].t - c0).norm());
+  const double far = 1e4 * std::max(spread, 1e-6);
+  // The ray of the first view, used when the DLT point is at (or beyond) infinity.
+  const auto& o0 = obs[first];
+  const Vec3 ray_W = cams[o0.pose].R.transpose() * Vec3(o0.xn.x(), o0.xn.y(), 1).normalized();
+  if (std::abs(Xh[3]) * far > Xh.head<3>().norm())
+    X = Xh.head<3>() / Xh[3];
+  else
+    X = c0 + far * ray_W;
+  if ((cams[o0.pose].R * X + cams[o0.pose].t).z() <= 0) X = c0 + (X - c0).norm() * ray_W;
+
+  double lambda = 1e-6;
+  for (int it = 0; it < 20; ++it)
+  {
+    Mat3 H = Mat3::Zero();
+    Vec3 g = Vec3::Zero();
+    double cost = 0;
+    for (std::size_t k = first; k < last; ++k)
+    {
+      Vec2 r;
+      Mat23 J;
+      if (!reprojectionResidual(cams[obs[k].pose].R, cams[obs[k].pose].t, X, obs[k].xn, fx, fy, r, nullptr, &J))
+        return false;
+      H += J.transpose() * J;
+      g -= J.transpose() * r;  // r = z - h: d r / dX = -d h / dX = J, so the step solves H dX = -J^T r
+      cost += r.squaredNorm();
+    }
+    const Vec3 dX = (H + lambda * Mat3(H.diagonal().asDiagonal()) + 1e-12 * Mat3::Identity()).ldlt().solve(g);
+    const Vec3 Xn = X + dX;
+    double newCost = 0;
+    bool ok = true;
+    for (std::size_t k = first; k < last && ok; ++k)
+    {
+      Vec2 r;
+      ok = reprojectionResidual(cams[obs[k].pose].R, cams[obs[k].pose].t, Xn, obs[k].xn, fx, fy, r);
+      newCost += r.squaredNorm();
+    }
+    if (ok && newCost <= cost)
+    {
+      X = Xn;
+      lambda = std::max(lambda / 10, 1e-9);
+      if (cost - newCost <= 1e-12 * (1 + cost)) break;
+    }
+    else
+      lambda *= 10;
+    if (lambda > 1e6) break;
+  }
+  return true;
+}
+
+std::vector<TPoseCW> cameras(const TBundleProblem& p)
+{
+  std::vector<TPoseCW> c;
+  c.reserve(p.poses.size());
+  for (const auto& pose : p.poses) c.push_back(cameraFromWorld(pose));
+  return c;
+}
+
+/** Robust cost per measurement of the problem with these cameras and points; infinity if a point
+ * is behind a camera that sees it. */
+double robustCost(const std::vector<TPoseCW>& cams, const std::vector<Vec3>& X, const TBundleProblem& p, double k)
+{
+  double c = 0;
+  for (const auto& o : p.obs)
+  {
+    Vec2 r;
+    if (!reprojectionResidual(cams[o.pose].R, cams[o.pose].t, X[o.point], o.xn, p.fx, p.fy, r))
+      return std::numeric_limits<double>::infinity();
+    c += huberCost(r.norm(), k);
+  }
+  return p.obs.empty() ? 0 : c / static_cast<double>(p.obs.size());
+}
+}  // namespace
+
+bool reprojectionResidual(const Mat3& R_CW, const Vec3& t_CW, const Vec3& X_W, const Vec2& xn, double fx,
+                          double fy, Vec2& r, Eigen::Matrix<double, 2, 6>* J_pose, Mat23* J_point)
+{
+  const Vec3 RX = R_CW * X_W;
+  const Vec3 q = RX + t_CW;
+  if (!(q.z() > 0)) return false;
+  const double iz = 1.0 / q.z();
+  r = Vec2(fx * (xn.x() - q.x() * iz), fy * (xn.y() - q.y() * iz));
+  if (!J_pose && !J_point) return true;
+  // d r / d q = -diag(fx, fy) d(q_x/q_z, q_y/q_z)/dq.
+  Mat23 Jq;
+  Jq << -fx * iz, 0, fx * q.x() * iz * iz, 0, -fy * iz, fy * q.y() * iz * iz;
+  // q(dtheta) = exp(dtheta) R X + t: d q / d dtheta = -[R X]x.
+  if (J_pose)
+  {
+    J_pose->leftCols<3>() = -Jq * math::skew(RX);
+    J_pose->rightCols<3>() = Jq;
+  }
+  if (J_point) *J_point = Jq * R_CW;
+  return true;
+}
+
+TBundleProblem makeBundleProblem(const std::vector<TSearchRow>& rows, const TTrajectory& poses,
+                                 const camera::CCameraModel& cam, double maxDt, int minViews, int minPerPose)
+{
+  if (minViews < 2) throw std::invalid_argument("makeBundleProblem: minViews must be >= 2");
+  if (minPerPose < 1) throw std::invalid_argument("makeBundleProblem: minPerPose must be >= 1");
+  if (!(maxDt >= 0)) throw std::invalid_argument("makeBundleProblem: maxDt must be >= 0");
+  std::vector<std::size_t> order(poses.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return poses[a].timestamp < poses[b].timestamp; });
+
+  std::size_t used = 0, joined = 0;
+  std::map<std::int64_t, std::vector<TBundleObservation>> byFeature;
+  std::map<std::int64_t, std::vector<char>> seenFrom;  // one measurement per pose and feature
+  for (const auto& row : rows)
+  {
+    if (!row.usedInUpdate() || !row.z.allFinite()) continue;
+    ++used;
+    const long pose = nearestPose(poses, order, row.timestamp, maxDt);
+    if (pose < 0) continue;
+    auto& seen = seenFrom[row.featureId];
+    if (seen.empty()) seen.assign(poses.size(), 0);
+    if (seen[static_cast<std::size_t>(pose)]) continue;
+    seen[static_cast<std::size_t>(pose)] = 1;
+    const math::Bearing b = cam.unproject(row.z);
+    const Vec3& d = b.unitVector();
+    if (!(d.z() > 0)) continue;
+    ++joined;
+    byFeature[row.featureId].push_back({static_cast<std::size_t>(pose), 0, Vec2(d.x() / d.z(), d.y() / d.z())});
+  }
+
+  // Features measured from minViews poses, and poses measuring minPerPose of those features:
+  // dropping a weak pose may leave a feature short of views, so repeat until both hold.
+  std::vector<std::size_t> perPose(poses.size(), 0);
+  std::vector<char> poseKept(poses.size(), 1);
+  for (bool changed = true; changed;)
+  {
+    changed = false;
+    std::fill(perPose.begin(), perPose.end(), 0);
+    for (const auto& [id, o] : byFeature)
+    {
+      const auto n = std::count_if(o.begin(), o.end(), [&](const TBundleObservation& m) { return poseKept[m.pose]; });
+      if (n >= minViews)
+        for (const auto& m : o) perPose[m.pose] += poseKept[m.pose] ? 1 : 0;
+    }
+    for (std::size_t i = 0; i < poses.size(); ++i)
+      if (poseKept[i] && perPose[i] < static_cast<std::size_t>(minPerPose)) poseKept[i] = 0, changed = true;
+  }
+  // Kept poses in time order (the first one holds the gauge of a refinement).
+  TBundleProblem p;
+  p.fx = cam.fx();
+  p.fy = cam.fy();
+  std::vector<std::size_t> newIndex(poses.size(), 0);
+  for (const std::size_t i : order)
+    if (poseKept[i])
+    {
+      newIndex[i] = p.poses.size();
+      p.poses.push_back(poses[i]);
+    }
+  for (auto& [id, o] : byFeature)
+  {
+    std::vector<TBundleObservation> kept;
+    for (const auto& m : o)
+      if (poseKept[m.pose]) kept.push_back({newIndex[m.pose], p.featureIds.size(), m.xn});
+    if (static_cast<int>(kept.size()) < minViews) continue;
+    p.featureIds.push_back(id);
+    p.obs.insert(p.obs.end(), kept.begin(), kept.end());
+  }
+  if (p.featureIds.empty())
+    throw std::runtime_error("no feature has " + std::to_string(minViews) + " measurements joined to poses that measure " +
+                             std::to_string(minPerPose) + " such features (" +
+                             std::to_string(used) + " matches used in updates, " + std::to_string(joined) +
+                             " joined to a pose within " + std::to_string(maxDt) + " s)");
+  p.points.assign(p.featureIds.size(), Vec3::Zero());
+  triangulateAll(p);
+  return p;
+}
+
+TReprojectionStats reprojectionStats(const TBundleProblem& p, double thresholdPx)
+{
+  const auto cams = cameras(p);
+  TReprojectionStats s;
+  s.thresholdPx = thresholdPx;
+  s.nFeatures = p.points.size();
+  s.nObservations = p.obs.size();
+  std::vector<char> posed(p.poses.size(), 0);
+  std::vector<double> sum(p.points.size(), 0.0);
+  std::vector<std::size_t> cnt(p.points.size(), 0);
+  double total = 0;
+  for (const auto& o : p.obs)
+  {
+    Vec2 r;
+    const double e2 = reprojectionResidual(cams[o.pose].R, cams[o.pose].t, p.points[o.point], o.xn, p.fx, p.fy, r)
+                          ? r.squaredNorm()
+                          : std::numeric_limits<double>::infinity();
+    sum[o.point] += e2;
+    ++cnt[o.point];
+    total += e2;
+    posed[o.pose] = 1;
+  }
+  s.nPoses = static_cast<std::size_t>(std::count(posed.begin(), posed.end(), 1));
+  s.rmsPx = p.obs.empty() ? 0 : std::sqrt(total / static_cast<double>(p.obs.size()));
+  for (std::size_t j = 0; j < sum.size(); ++j)
+  {
+    s.featureRmsPx.push_back(cnt[j] ? std::sqrt(sum[j] / static_cast<double>(cnt[j])) : 0.0);
+    if (s.featureRmsPx.back() > thresholdPx) ++s.featuresAbove;
+  }
+  if (!s.featureRmsPx.empty())
+  {
+    s.medianFeatureRmsPx = percentile(s.featureRmsPx, 50);
+    s.p90FeatureRmsPx = percentile(s.featureRmsPx, 90);
+  }
+  return s;
+}
+
+TReprojectionStats triangulateAll(TBundleProblem& p, double thresholdPx)
+{
+  const auto cams = cameras(p);
+  std::size_t first = 0;
+  while (first < p.obs.size())
+  {
+    std::size_t last = first;
+    while (last < p.obs.size() && p.obs[last].point == p.obs[first].point) ++last;
+    Vec3 X = p.points[p.obs[first].point];
+    if (triangulatePoint(cams, p.obs, first, last, p.fx, p.fy, X)) p.points[p.obs[first].point] = X;
+    first = last;
+  }
+  return reprojectionStats(p, thresholdPx);
+}
+
+TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
+{
+  const int nP = static_cast<int>(p.poses.size()), nX = static_cast<int>(p.points.size());
+  const int n = 6 * nP + 3 * nX;
+  auto cams = cameras(p);
+  auto X = p.points;
+  TBundleResult res;
+  double cost = robustCost(cams, X, p, opts.huberPx);
+  res.initialCost = res.finalCost = cost;
+  if (!std::isfinite(cost) || p.obs.empty()) return res;
+
+  double lambda = 1e-4;
+  for (res.iterations = 0; res.iterations < opts.maxIterations; ++res.iterations)
+  {
+    // Normal equations J^T W J d = -J^T W r (r = z - h, so J = d r / d params).
+    std::vector<Eigen::Triplet<double>> trip;
+    trip.reserve(p.obs.size() * 81 + static_cast<std::size_t>(n));
+    VecX g = VecX::Zero(n);
+    for (const auto& o : p.obs)
+    {
+      Vec2 r;
+      Eigen::Matrix<double, 2, 6> Jp;
+      Mat23 Jx;
+      reprojectionResidual(cams[o.pose].R, cams[o.pose].t, X[o.point], o.xn, p.fx, p.fy, r, &Jp, &Jx);
+      const double w = huberWeight(r.norm(), opts.huberPx);
+      Eigen::Matrix<double, 2, 9> J;
+      J << Jp, Jx;
+      const Eigen::Matrix<double, 9, 9> H = w * J.transpose() * J;
+      const int ip = 6 * static_cast<int>(o.pose), ix = 6 * nP + 3 * static_cast<int>(o.point);
+      const int idx[9] = {ip, ip + 1, ip + 2, ip + 3, ip + 4, ip + 5, ix, ix + 1, ix + 2};
+      for (int a = 0; a < 9; ++a)
+      {
+        g[idx[a]] -= w * J.col(a).dot(r);
+        for (int b = 0; b < 9; ++b) trip.emplace_back(idx[a], idx[b], H(a, b));
+      }
+    }
+    for (int a = 0; a < 6; ++a) trip.emplace_back(a, a, 1e10);  // gauge: the first pose stays
+    Eigen::SparseMatrix<double> H(n, n);
+    H.setFromTriplets(trip.begin(), trip.end());
+    const VecX diag = H.diagonal();
+
+    bool accepted = false;
+    while (!accepted && lambda <= 1e8)
+    {
+      Eigen::SparseMatrix<double> A = H;
+      for (int i = 0; i < n; ++i) A.coeffRef(i, i) += lambda * diag[i] + 1e-12;
+      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
+      if (ldlt.info() != Eigen::Success)
+      {
+        lambda *= 10;
+        continue;
+      }
+      const VecX d = ldlt.solve(g);
+      auto cams2 = cams;
+      auto X2 = X;
+      for (int i = 0; i < nP; ++i)
+      {
+        cams2[i].R = expSO3(d.segment<3>(6 * i)) * cams[i].R;
+        cams2[i].t = cams[i].t + d.segment<3>(6 * i + 3);
+      }
+      for (int j = 0; j < nX; ++j) X2[j] = X[j] + d.segment<3>(6 * nP + 3 * j);
+      const double c2 = robustCost(cams2, X2, p, opts.huberPx);
+      if (c2 < cost)
+      {
+        const bool small = cost - c2 <= 1e-9 * cost;
+        cams.swap(cams2);
+        X.swap(X2);
+        cost = c2;
+        lambda = std::max(lambda / 5, 1e-9);
+        accepted = true;
+        if (small) res.converged = true;
+      }
+      else
+        lambda *= 5;
+    }
+    if (!accepted) res.converged = true;  // no step lowers the cost: a minimum (to the damping's limit)
+    if (res.converged) break;
+  }
+  for (int i = 0; i < nP; ++i) setFromCameraFromWorld(p.poses[i], cams[i]);
+  p.points = X;
+  res.finalCost = cost;
+  return res;
+}
+
+std::string TReprojectionStats::summary() const
+{
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(3);
+  os << "features        : " << nFeatures << " (" << nObservations << " measurements from " << nPoses << " poses)\n"
+     << "reprojection RMS: " << rmsPx << " px\n"
+     << "per feature RMS : median " << medianFeatureRmsPx << " px, 90th percentile " << p90FeatureRmsPx << " px; "
+     << featuresAbove << " features above " << thresholdPx << " px\n";
+  return os.str();
+}
+}  // namespace immslam::eval

@@ -1,0 +1,259 @@
+/* Tests: reprojection error of a trajectory against searches.csv measurements, and the bundle
+ * adjustment: residual Jacobians against numerical ones, a true trajectory leaves only the
+ * matching noise (pinhole and distorted cameras), a bent one shows, the refinement recovers the
+ * true trajectory from the bent one, and the errors of bad input and of the CLI. */
+#include <gtest/gtest.h>
+#include <immslam/camera/CCameraModel.h>
+#include <immslam/eval/alignment.h>
+#include <immslam/eval/reprojection.h>
+#include <immslam/eval/slam_eval_app.h>
+#include <immslam/math/numerical_jacobian.h>
+#include <immslam/math/quaternion.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+using namespace immslam;
+using namespace immslam::eval;
+
+namespace
+{
+std::string tempPath(const std::string& name)
+{
+  return (std::filesystem::path(::testing::TempDir()) / ("immslam_reproj_" + name)).string();
+}
+
+/** A camera moving sideways and forward past a box of points, turning a little. */
+struct TScene
+{
+  TTrajectory poses;
+  std::vector<Vec3> points;
+};
+
+TScene makeScene(int nPoses = 60, int nPoints = 50)
+{
+  TScene s;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> ux(-2, 2), uy(-1.5, 1.5), uz(4, 7);
+  for (int j = 0; j < nPoints; ++j) s.points.emplace_back(ux(rng), uy(rng), uz(rng));
+  for (int i = 0; i < nPoses; ++i)
+  {
+    TStampedPose p;
+    p.timestamp = 0.1 * i;
+    const double a = 0.05 * i;
+    p.p_W_C = Vec3(0.6 * std::sin(a), 0.15 * std::cos(0.7 * a), 0.02 * i);
+    p.q_W_C = math::quatFromRotationVector(Vec3(0.03 * std::sin(a), -0.08 * std::sin(a), 0.02 * std::cos(a)));
+    s.poses.push_back(p);
+  }
+  return s;
+}
+
+/** The measurements of every point from every pose (distorted pixels of `cam`), with noise. */
+std::vector<TSearchRow> measure(const TScene& s, const camera::CCameraModel& cam, double noisePx)
+{
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n(0, noisePx);
+  std::vector<TSearchRow> rows;
+  for (const auto& p : s.poses)
+  {
+    const Mat3 R_WC = math::quatToRotation(p.q_W_C);
+    for (std::size_t j = 0; j < s.points.size(); ++j)
+    {
+      Vec2 uv;
+      if (!cam.project(R_WC.transpose() * (s.points[j] - p.p_W_C), uv) || !cam.isInImage(uv)) continue;
+      TSearchRow r;
+      r.timestamp = p.timestamp;
+      r.featureId = static_cast<std::int64_t>(100 + j);
+      r.found = true;
+      r.z = uv + Vec2(n(rng), n(rng));
+      r.h = r.z;
+      r.S = Mat2::Identity();
+      r.status = j % 5 == 0 ? ESearchStatus::Rescued : ESearchStatus::Inlier;
+      rows.push_back(r);
+    }
+  }
+  return rows;
+}
+
+/** The trajectory turned by an angle growing along it (a drift the points cannot all agree with). */
+TTrajectory bend(const TTrajectory& t, double maxDeg)
+{
+  TTrajectory out = t;
+  for (std::size_t i = 0; i < out.size(); ++i)
+  {
+    const double f = static_cast<double>(i) / static_cast<double>(out.size() - 1);
+    const Vec4 dq = math::quatFromRotationVector(Vec3(0, f * maxDeg * M_PI / 180, 0));
+    out[i].q_W_C = math::quatMultiply(dq, out[i].q_W_C);
+    out[i].p_W_C += Vec3(0.3 * f, -0.2 * f * f, 0.1 * f);
+  }
+  return out;
+}
+
+double rmsAfterSim3(const TTrajectory& est, const TTrajectory& truth)
+{
+  const auto a = trajectoryPositions(est), b = trajectoryPositions(truth);
+  const TSim3 S = alignUmeyama(a, b, true);
+  double s2 = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) s2 += (S.transform(a[i]) - b[i]).squaredNorm();
+  return std::sqrt(s2 / static_cast<double>(a.size()));
+}
+
+camera::CCameraModel::Ptr pinhole() { return camera::parseCalibLine("pinhole 640 480 500 500 319.5 239.5", "test"); }
+}  // namespace
+
+TEST(Reprojection, ResidualJacobiansMatchNumericalOnes)
+{
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 20; ++trial)
+  {
+    const Mat3 R = math::quatToRotation(math::quatFromRotationVector(Vec3(u(rng), u(rng), u(rng))));
+    const Vec3 t(u(rng), u(rng), 5 + u(rng));
+    const Vec3 X(u(rng), u(rng), u(rng));
+    const Vec2 xn(0.1 * u(rng), 0.1 * u(rng));
+    Vec2 r;
+    Eigen::Matrix<double, 2, 6> Jp;
+    Mat23 Jx;
+    ASSERT_TRUE(reprojectionResidual(R, t, X, xn, 450, 470, r, &Jp, &Jx));
+    const auto fPose = [&](const VecX& d) {
+      Vec2 rr;
+      reprojectionResidual(math::quatToRotation(math::quatFromRotationVector(d.head<3>())) * R, t + d.tail<3>(), X, xn,
+                           450, 470, rr);
+      return VecX(rr);
+    };
+    const auto fPoint = [&](const VecX& x) {
+      Vec2 rr;
+      reprojectionResidual(R, t, x, xn, 450, 470, rr);
+      return VecX(rr);
+    };
+    EXPECT_LT((math::numericalJacobian(fPose, VecX::Zero(6)) - MatX(Jp)).cwiseAbs().maxCoeff(), 1e-5);
+    EXPECT_LT((math::numericalJacobian(fPoint, VecX(X)) - MatX(Jx)).cwiseAbs().maxCoeff(), 1e-5);
+  }
+  Vec2 r;
+  EXPECT_FALSE(reprojectionResidual(Mat3::Identity(), Vec3(0, 0, -10), Vec3(0, 0, 1), Vec2::Zero(), 1, 1, r));
+}
+
+TEST(Reprojection, TheTrueTrajectoryLeavesOnlyTheMatchingNoise)
+{
+  const TScene s = makeScene();
+  const auto cam = pinhole();
+  const TBundleProblem exact = makeBundleProblem(measure(s, *cam, 0.0), s.poses, *cam, 1e-4, 8);
+  const TReprojectionStats e = reprojectionStats(exact);
+  EXPECT_EQ(e.nFeatures, s.points.size());
+  EXPECT_EQ(e.nPoses, s.poses.size());
+  EXPECT_LT(e.rmsPx, 1e-6);
+  for (std::size_t j = 0; j < exact.points.size(); ++j)
+    EXPECT_LT((exact.points[j] - s.points[static_cast<std::size_t>(exact.featureIds[j] - 100)]).norm(), 1e-6);
+
+  const TReprojectionStats n = reprojectionStats(makeBundleProblem(measure(s, *cam, 0.5), s.poses, *cam, 1e-4, 8));
+  // |r| has 2 dof: sqrt(2) 0.5 sqrt(1 - 3 / (2 x 60)) = 0.70 for 60 views.
+  EXPECT_GT(n.rmsPx, 0.63);
+  EXPECT_LT(n.rmsPx, 0.76);
+  EXPECT_EQ(n.featuresAbove, 0u);
+}
+
+TEST(Reprojection, DistortedPixelsAreUndistortedFirst)
+{
+  const TScene s = makeScene();
+  const auto cam = camera::parseCalibLine("opencv 640 480 500 500 319.5 239.5 -0.3 0.1 0.001 -0.001 0", "test");
+  const TReprojectionStats e = reprojectionStats(makeBundleProblem(measure(s, *cam, 0.0), s.poses, *cam, 1e-4, 8));
+  EXPECT_EQ(e.nFeatures, s.points.size());
+  EXPECT_LT(e.rmsPx, 1e-4);
+}
+
+TEST(Reprojection, ABentTrajectoryShowsAndTheRefinementRecoversTheTrueOne)
+{
+  const TScene s = makeScene();
+  const auto cam = pinhole();
+  const auto rows = measure(s, *cam, 0.2);
+  const TTrajectory bent = bend(s.poses, 3.0);
+  TBundleProblem p = makeBundleProblem(rows, bent, *cam, 1e-4, 8);
+  const TReprojectionStats before = reprojectionStats(p);
+  EXPECT_GT(before.rmsPx, 3.0);
+  const double ateBefore = rmsAfterSim3(bent, s.poses);
+
+  const TBundleResult r = bundleAdjust(p);
+  EXPECT_TRUE(r.converged);
+  EXPECT_LT(r.finalCost, r.initialCost);
+  const TReprojectionStats after = reprojectionStats(p);
+  EXPECT_LT(after.rmsPx, 0.3);  // the noise: sqrt(2) 0.2
+  EXPECT_EQ(after.featuresAbove, 0u);
+  // The same minimum as a refinement started from the truth.
+  TBundleProblem q = makeBundleProblem(rows, s.poses, *cam, 1e-4, 8);
+  bundleAdjust(q);
+  EXPECT_LT(rmsAfterSim3(p.poses, q.poses), 1e-4);
+  // Timestamps kept; the first pose held; the trajectory back on the true one up to Sim(3).
+  for (std::size_t i = 0; i < p.poses.size(); ++i) EXPECT_EQ(p.poses[i].timestamp, s.poses[i].timestamp);
+  EXPECT_LT((p.poses[0].p_W_C - bent[0].p_W_C).norm(), 1e-6);
+  const double ateAfter = rmsAfterSim3(p.poses, s.poses);
+  EXPECT_LT(ateAfter, 0.1 * ateBefore) << ateBefore << " -> " << ateAfter;
+  EXPECT_LT(ateAfter, 0.005);  // the path is about 1.8 long
+}
+
+TEST(Reprojection, BadInputIsNamed)
+{
+  const TScene s = makeScene(10, 10);
+  const auto cam = pinhole();
+  auto rows = measure(s, *cam, 0.0);
+  EXPECT_THROW(makeBundleProblem(rows, s.poses, *cam, 1e-4, 1), std::invalid_argument);
+  EXPECT_THROW(makeBundleProblem(rows, s.poses, *cam, -1, 8), std::invalid_argument);
+  // Poses of another run (timestamps shifted): nothing joins, and the message says so.
+  TTrajectory shifted = s.poses;
+  for (auto& p : shifted) p.timestamp += 0.05;
+  try
+  {
+    makeBundleProblem(rows, shifted, *cam, 1e-4, 8);
+    FAIL() << "no exception";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("0 joined"), std::string::npos) << e.what();
+  }
+  // Rejected and unmatched rows are not measurements.
+  for (auto& r : rows) r.status = ESearchStatus::Rejected;
+  EXPECT_THROW(makeBundleProblem(rows, s.poses, *cam, 1e-4, 8), std::runtime_error);
+}
+
+TEST(Reprojection, CommandLine)
+{
+  const TScene s = makeScene(30, 20);
+  const auto cam = pinhole();
+  const std::string searches = tempPath("searches.csv"), poses = tempPath("poses.txt"), calib = tempPath("calib.txt"),
+                    refined = tempPath("refined.txt");
+  {
+    std::ofstream f(searches);
+    f << "timestamp,feature_id,h_u,h_v,s_uu,s_uv,s_vv,found,z_u,z_v,score,status\n";
+    f.precision(17);
+    for (const auto& r : measure(s, *cam, 0.3))
+      f << r.timestamp << "," << r.featureId << "," << r.h.x() << "," << r.h.y() << ",1,0,1,1," << r.z.x() << ","
+        << r.z.y() << ",0.99," << searchStatusName(r.status) << "\n";
+  }
+  writeTumTrajectory(bend(s.poses, 2.0), poses);
+  std::ofstream(calib) << "# test\n" << cam->toCalibLine() << "\n";
+
+  std::ostringstream out, err;
+  ASSERT_EQ(runSlamEvalApp({"slam-eval", "reprojection", searches, poses, "--calib", calib, "--refine", refined}, out,
+                           err),
+            0)
+      << err.str();
+  EXPECT_NE(out.str().find("reprojection RMS"), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find("after bundle adjustment"), std::string::npos) << out.str();
+  EXPECT_EQ(readTumTrajectory(refined).size(), s.poses.size());
+  const auto rowsBack = readSearchesCsv(searches);
+  EXPECT_GT(reprojectionStats(makeBundleProblem(rowsBack, bend(s.poses, 2.0), *cam, 1e-4, 8)).rmsPx, 2.0);
+  EXPECT_LT(reprojectionStats(makeBundleProblem(rowsBack, readTumTrajectory(refined), *cam, 1e-4, 8)).rmsPx, 0.5);
+
+  std::ostringstream o2, e2;
+  EXPECT_EQ(runSlamEvalApp({"slam-eval", "reprojection", searches, poses}, o2, e2), 2);
+  EXPECT_NE(e2.str().find("--calib is required"), std::string::npos) << e2.str();
+  std::ostringstream o3, e3;
+  EXPECT_EQ(runSlamEvalApp({"slam-eval", "reprojection", searches, poses, "--calib", tempPath("missing.txt")}, o3, e3),
+            1);
+  EXPECT_NE(e3.str().find("missing.txt"), std::string::npos) << e3.str();
+  std::ostringstream o4, e4;
+  EXPECT_EQ(runSlamEvalApp({"slam-eval", "reprojection", searches, poses, "--calib", calib, "--min-views", "1"}, o4, e4),
+            2);
+}
