@@ -1,6 +1,15 @@
 /* The command line of CONTRACT.md: usage errors, config errors naming the key, --help/--version. */
 #include "test_helpers.h"
 
+#include <immslam/camera/CCameraModel.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
 using namespace immslam;
 using namespace immslam::test;
 
@@ -33,4 +42,48 @@ TEST(AppCli, BadConfigAndInputExitWithOne)
   EXPECT_NE(err.find("[bogus]"), std::string::npos) << err;
   EXPECT_NE(err.find("/nonexistent.rawlog"), std::string::npos) << err;
   EXPECT_NE(err.find("/nonexistent/calib.txt"), std::string::npos) << err;
+}
+
+TEST(AppCli, FieldOfViewGuessForAnInputWithoutCalibration)
+{
+  // A folder of images without calib.txt: refused with a message naming --fov; run with --fov 60 on a
+  // pinhole of the images' own size, written to calib_guessed.txt; --fov with --calib is bad usage.
+  const std::string folder = outDir("uncalibrated_input");
+  std::filesystem::create_directories(folder + "/rgb");
+  cv::Mat texture(340, 440, CV_8UC1);
+  cv::RNG rng(5);
+  rng.fill(texture, cv::RNG::UNIFORM, 0, 255);
+  cv::GaussianBlur(texture, texture, cv::Size(0, 0), 1.5);
+  {
+    std::ofstream list(folder + "/rgb.txt");
+    for (int k = 0; k < 12; ++k)
+    {
+      const std::string name = "rgb/" + std::to_string(k) + ".png";
+      cv::imwrite(folder + "/" + name, texture(cv::Rect(20 + k, 20, 400, 300)));
+      list << k / 30.0 << " " << name << "\n";
+    }
+  }
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(runApp({sourceDir() + "/ini/single.ini", folder, "--out", outDir("fov_none"), "--no-gui"}), 1);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("--fov"), std::string::npos) << err;
+
+  EXPECT_EQ(runApp({sourceDir() + "/ini/single.ini", folder, "--fov", "0"}), 2);
+  EXPECT_EQ(runApp({sourceDir() + "/ini/single.ini", folder, "--fov", "wide"}), 2);
+  EXPECT_EQ(runApp({sourceDir() + "/ini/single.ini", folder, "--fov", "60", "--calib", folder + "/x.txt"}), 2);
+
+  const std::string out = outDir("fov_60");
+  app::TRunSummary s;
+  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", folder, "--fov", "60", "--out", out, "--no-gui", "--set",
+                    "output.plots=false"},
+                   &s),
+            0);
+  EXPECT_EQ(s.framesProcessed, 12u);
+  const auto cam = camera::loadCalibFile(out + "/calib_guessed.txt");
+  EXPECT_EQ(cam->modelName(), "pinhole");
+  EXPECT_EQ(cam->width(), 400);
+  EXPECT_EQ(cam->height(), 300);
+  EXPECT_NEAR(cam->fx(), 200 / std::tan(M_PI / 6), 1e-9);
+  EXPECT_NEAR(cam->cx(), 199.5, 1e-12);
+  EXPECT_NEAR(cam->cy(), 149.5, 1e-12);
 }

@@ -32,11 +32,13 @@ std::string CImmMonoSlamApp::usage()
          "  IMM monocular EKF SLAM (+ MonoSLAMBOT shadow filter) on a rawlog, a dataset folder,\n"
          "  a video file, a live MRPT camera, or the built-in rendered scene.\n"
          "  INPUT                   a .rawlog file, a dataset folder (rgb.txt, calib.txt, ...) or a\n"
-         "                          video file (.mp4 .avi .mkv .mov ...; needs --calib);\n"
+         "                          video file (.mp4 .avi .mkv .mov ...; needs --calib or --fov);\n"
          "                          default: [input] source of the config\n"
          "Options:\n"
          "  --out DIR               output folder (default imm-monoslam-out)\n"
          "  --calib FILE            camera calibration (calib.txt format), overrides input/config\n"
+         "  --fov DEG               no calibration at all: guess a pinhole camera of this horizontal\n"
+         "                          field of view (centred, no distortion; written to calib_guessed.txt)\n"
          "  --live GRABBER.ini[:SECTION]  live capture through mrpt::hwdrivers::CCameraSensor\n"
          "  --record FILE.rawlog    record the live stream while running\n"
          "  --frames N              stop after N frames\n"
@@ -108,6 +110,22 @@ int CImmMonoSlamApp::initialize(const std::vector<std::string>& args)
     {
       if (!needValue(i, a, m_args.calib)) return 2;
     }
+    else if (a == "--fov")
+    {
+      if (!needValue(i, a, v)) return 2;
+      try
+      {
+        std::size_t pos = 0;
+        m_args.fovDeg = std::stod(v, &pos);
+        if (pos != v.size() || !(m_args.fovDeg >= 1 && m_args.fovDeg <= 179)) throw std::invalid_argument(v);
+      }
+      catch (const std::exception&)
+      {
+        std::cerr << "imm-monoslam: --fov needs a horizontal field of view in degrees in [1, 179], got '" << v
+                  << "'\n";
+        return 2;
+      }
+    }
     else if (a == "--live")
     {
       if (!needValue(i, a, m_args.live)) return 2;
@@ -160,6 +178,11 @@ int CImmMonoSlamApp::initialize(const std::vector<std::string>& args)
   if (!m_args.input.empty() && !m_args.live.empty())
   {
     std::cerr << "imm-monoslam: give either INPUT or --live, not both\n";
+    return 2;
+  }
+  if (!m_args.calib.empty() && m_args.fovDeg > 0)
+  {
+    std::cerr << "imm-monoslam: give either --calib or --fov (a guess for an input without calibration), not both\n";
     return 2;
   }
 

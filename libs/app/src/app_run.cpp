@@ -197,10 +197,25 @@ int CImmMonoSlamApp::runImpl()
     cam = source->calibration();
     calibOrigin = "the input";
   }
+  // --fov: no calibration anywhere, a guess of the first frame's size (a placeholder until then).
+  bool guessCalibration = false;
+  if (m_args.fovDeg > 0)
+  {
+    if (cam)
+      logStr(mrpt::system::LVL_WARN, "--fov ignored: the calibration of " + calibOrigin + " is used");
+    else
+    {
+      cam = camera::pinholeFromFieldOfView(640, 480, m_args.fovDeg);
+      std::ostringstream fov;
+      fov << m_args.fovDeg;
+      calibOrigin = "guessed from --fov " + fov.str() + " at the first frame's size";
+      guessCalibration = true;
+    }
+  }
   if (!cam)
-    throw std::runtime_error("no camera calibration: the input has none; give --calib FILE (calib.txt format) or a "
-                             "[camera] section in " + m_args.config);
-  logStr(mrpt::system::LVL_INFO, "camera (" + calibOrigin + "): " + cam->toCalibLine());
+    throw std::runtime_error("no camera calibration: the input has none; give --calib FILE (calib.txt format), a "
+                             "[camera] section in " + m_args.config + ", or --fov DEG to guess one");
+  if (!guessCalibration) logStr(mrpt::system::LVL_INFO, "camera (" + calibOrigin + "): " + cam->toCalibLine());
 
   // ---- System and outputs
   std::unique_ptr<system::CMonoSlamSystem> sys;
@@ -223,7 +238,7 @@ int CImmMonoSlamApp::runImpl()
     const std::string eff = effectiveConfigText();
     std::ofstream f(out.path("config_effective.ini"));
     f << "# Effective configuration of this run (" << version() << ")\n# config: " << m_args.config << "\n# camera: "
-      << cam->toCalibLine() << "\n"
+      << (guessCalibration ? calibOrigin + " (calib_guessed.txt)" : cam->toCalibLine()) << "\n"
       << eff;
     if (!m_args.quiet) logStr(mrpt::system::LVL_DEBUG, "effective configuration:\n" + eff);
   }
@@ -260,6 +275,15 @@ int CImmMonoSlamApp::runImpl()
     {
       skip(why);
       continue;
+    }
+    if (guessCalibration)
+    {
+      // The guessed pinhole at this frame's size, kept for a re-run with --calib.
+      guessCalibration = false;
+      cam = camera::pinholeFromFieldOfView(frame.grey.cols, frame.grey.rows, m_args.fovDeg);
+      sys = std::make_unique<system::CMonoSlamSystem>(m_cfg, cam);
+      camera::saveCalibFile(*cam, out.path("calib_guessed.txt"));
+      logStr(mrpt::system::LVL_INFO, "camera (" + calibOrigin + "): " + cam->toCalibLine());
     }
     if (frame.grey.cols != cam->width() || frame.grey.rows != cam->height())
     {

@@ -87,6 +87,16 @@ bool parseInt(const std::string& word, int& out)
 }
 }  // namespace
 
+CCameraModel::Ptr pinholeFromFieldOfView(int width, int height, double hfovDeg)
+{
+  if (width <= 0 || height <= 0 || !(hfovDeg >= 1 && hfovDeg <= 179))
+    throw std::invalid_argument("pinholeFromFieldOfView: need a positive image size and a field of view in [1, 179] "
+                                "degrees, got " + std::to_string(width) + "x" + std::to_string(height) + ", " +
+                                std::to_string(hfovDeg));
+  const double f = 0.5 * width / std::tan(0.5 * hfovDeg * M_PI / 180.0);
+  return makeCameraModel("pinhole", width, height, {f, f, 0.5 * (width - 1), 0.5 * (height - 1)});
+}
+
 CCameraModel::Ptr makeCameraModel(
     const std::string& model, int width, int height, const std::vector<double>& params)
 {

@@ -351,3 +351,19 @@ TEST(MrptCamera, ConfigErrorsNameSectionAndKey)
   EXPECT_NE(msg.find("[NOPE] not found"), std::string::npos) << msg;
   EXPECT_EQ(cameraConfigKeys().size(), 12u);
 }
+
+TEST(CalibFile, PinholeFromFieldOfView)
+{
+  // 90 degrees over 640 px: f = 320; a ray 45 degrees to the right meets the image's right edge.
+  const auto cam = camera::pinholeFromFieldOfView(640, 480, 90);
+  EXPECT_EQ(cam->modelName(), "pinhole");
+  EXPECT_NEAR(cam->fx(), 320, 1e-9);
+  EXPECT_NEAR(cam->fy(), 320, 1e-9);
+  Vec2 uv;
+  ASSERT_TRUE(cam->project(Vec3(1, 0, 1), uv));
+  EXPECT_NEAR(uv.x(), 639.5, 1e-9);
+  EXPECT_NEAR(uv.y(), 239.5, 1e-9);
+  EXPECT_THROW(camera::pinholeFromFieldOfView(0, 480, 60), std::invalid_argument);
+  EXPECT_THROW(camera::pinholeFromFieldOfView(640, 480, 0.5), std::invalid_argument);
+  EXPECT_THROW(camera::pinholeFromFieldOfView(640, 480, 180), std::invalid_argument);
+}

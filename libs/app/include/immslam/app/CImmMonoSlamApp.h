@@ -27,6 +27,7 @@ struct TAppArguments
   std::string input;               ///< INPUT (rawlog or dataset folder), may be empty
   std::string outDir = "imm-monoslam-out";
   std::string calib;               ///< --calib FILE
+  double fovDeg = 0;               ///< --fov DEG: guessed calibration when none is given or found (0: none)
   std::string live;                ///< --live GRABBER.ini[:SECTION]
   std::string record;              ///< --record FILE.rawlog (live sessions)
   long long maxFrames = -1;        ///< --frames N

@@ -80,6 +80,12 @@ CCameraModel::Ptr parseCalibLine(const std::string& line, const std::string& con
  * \throws std::runtime_error naming the file and line. */
 CCameraModel::Ptr loadCalibFile(const std::string& path);
 
+/** A guess for a camera without calibration: a pinhole of the given image size whose horizontal
+ * field of view is `hfovDeg`, fx = fy = (W / 2) / tan(hfov / 2), principal point at the image centre
+ * ((W - 1) / 2, (H - 1) / 2 in the pixel-centre convention), no distortion.
+ * \throws std::invalid_argument unless W, H > 0 and 1 <= hfovDeg <= 179. */
+CCameraModel::Ptr pinholeFromFieldOfView(int width, int height, double hfovDeg);
+
 /** Writes a calib.txt file with a comment header. */
 void saveCalibFile(const CCameraModel& cam, const std::string& path);
 
