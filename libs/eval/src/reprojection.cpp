@@ -136,19 +136,24 @@ std::vector<TPoseCW> cameras(const TBundleProblem& p)
   return c;
 }
 
-/** Robust cost per measurement of the problem with these cameras and points; infinity if a point
- * is behind a camera that sees it. */
-double robustCost(const std::vector<TPoseCW>& cams, const std::vector<Vec3>& X, const TBundleProblem& p, double k)
+/** Robust cost per used measurement (`used[i]`) with these cameras and points; infinity if a point
+ * is behind a camera that uses it. */
+double robustCost(const std::vector<TPoseCW>& cams, const std::vector<Vec3>& X, const TBundleProblem& p, double k,
+                  const std::vector<char>& used)
 {
   double c = 0;
-  for (const auto& o : p.obs)
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < p.obs.size(); ++i)
   {
+    if (!used[i]) continue;
+    const auto& o = p.obs[i];
     Vec2 r;
     if (!reprojectionResidual(cams[o.pose].R, cams[o.pose].t, X[o.point], o.xn, p.fx, p.fy, r))
       return std::numeric_limits<double>::infinity();
     c += huberCost(r.norm(), k);
+    ++n;
   }
-  return p.obs.empty() ? 0 : c / static_cast<double>(p.obs.size());
+  return n == 0 ? 0 : c / static_cast<double>(n);
 }
 }  // namespace
 
@@ -310,9 +315,19 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
   auto cams = cameras(p);
   auto X = p.points;
   TBundleResult res;
-  double cost = robustCost(cams, X, p, opts.huberPx);
+  // A measurement whose point starts behind its camera (a mismatch the triangulation could not place)
+  // has no residual: it is left out of the whole adjustment.
+  std::vector<char> used(p.obs.size(), 1);
+  for (std::size_t i = 0; i < p.obs.size(); ++i)
+  {
+    Vec2 r;
+    const auto& o = p.obs[i];
+    used[i] = reprojectionResidual(cams[o.pose].R, cams[o.pose].t, X[o.point], o.xn, p.fx, p.fy, r) ? 1 : 0;
+  }
+  res.unused = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
+  double cost = robustCost(cams, X, p, opts.huberPx, used);
   res.initialCost = res.finalCost = cost;
-  if (!std::isfinite(cost) || p.obs.empty()) return res;
+  if (p.obs.empty()) return res;
 
   double lambda = 1e-4;
   for (res.iterations = 0; res.iterations < opts.maxIterations; ++res.iterations)
@@ -321,8 +336,10 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
     std::vector<Eigen::Triplet<double>> trip;
     trip.reserve(p.obs.size() * 81 + static_cast<std::size_t>(n));
     VecX g = VecX::Zero(n);
-    for (const auto& o : p.obs)
+    for (std::size_t i = 0; i < p.obs.size(); ++i)
     {
+      if (!used[i]) continue;
+      const auto& o = p.obs[i];
       Vec2 r;
       Eigen::Matrix<double, 2, 6> Jp;
       Mat23 Jx;
@@ -364,7 +381,7 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
         cams2[i].t = cams[i].t + d.segment<3>(6 * i + 3);
       }
       for (int j = 0; j < nX; ++j) X2[j] = X[j] + d.segment<3>(6 * nP + 3 * j);
-      const double c2 = robustCost(cams2, X2, p, opts.huberPx);
+      const double c2 = robustCost(cams2, X2, p, opts.huberPx, used);
       if (c2 < cost)
       {
         const bool small = cost - c2 <= 1e-9 * cost;

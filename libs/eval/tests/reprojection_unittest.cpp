@@ -257,3 +257,22 @@ TEST(Reprojection, CommandLine)
   EXPECT_EQ(runSlamEvalApp({"slam-eval", "reprojection", searches, poses, "--calib", calib, "--min-views", "1"}, o4, e4),
             2);
 }
+
+TEST(Reprojection, MeasurementsOfAPointBehindTheCameraAreLeftOut)
+{
+  const TScene s = makeScene();
+  const auto cam = pinhole();
+  TBundleProblem p = makeBundleProblem(measure(s, *cam, 0.2), bend(s.poses, 1.0), *cam, 1e-4, 8);
+  // A feature placed behind every camera (as a mismatch could leave it): its 8 measurements have no
+  // residual; the adjustment leaves them out and still converges on the others.
+  const std::size_t j = p.points.size();
+  p.points.emplace_back(0, 0, -50);
+  p.featureIds.push_back(999);
+  for (std::size_t i = 0; i < 8; ++i) p.obs.push_back({i, j, Vec2(0.01, -0.02)});
+  const TBundleResult r = bundleAdjust(p);
+  EXPECT_EQ(r.unused, 8u);
+  EXPECT_TRUE(std::isfinite(r.initialCost));
+  EXPECT_TRUE(r.converged);
+  EXPECT_LT(r.finalCost, r.initialCost);
+  EXPECT_TRUE(p.points[j].allFinite());
+}

@@ -100,6 +100,7 @@ struct TBundleResult
   int iterations = 0;
   double initialCost = 0, finalCost = 0;  ///< robust cost per measurement (px^2)
   bool converged = false;                 ///< relative cost decrease below 1e-9 or damping exhausted
+  std::size_t unused = 0;                 ///< measurements left out: their point starts behind the camera
 };
 
 /** Levenberg-Marquardt bundle adjustment of all poses and points with a Huber cost, sparse normal
