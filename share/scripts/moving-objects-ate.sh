@@ -3,7 +3,9 @@
 # on the rendered hand-held path without and with moving objects (same seed: same camera path and
 # static world), and with the objects for the IMM without shadow filter and for the single model.
 # Control: the same three boxes standing still at the centre of their paths (amplitude and spin 0):
-# the full system's ATE with objects that occlude and add texture but do not move.
+# the full system's ATE with objects that occlude and add texture but do not move. Last two columns: the
+# full system's trajectory_refined.txt ([output] refine_trajectory: an offline bundle adjustment of the
+# run's own matches) without and with the objects.
 # Usage: share/scripts/moving-objects-ate.sh [BUILD_DIR] [OUT_DIR] [SEED...]   (default build, /tmp/moving-ate, 7 11 23 42 101)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -13,8 +15,8 @@ shift $(( $# > 2 ? 2 : $# )) || true
 SEEDS=("$@")
 [ ${#SEEDS[@]} -eq 0 ] && SEEDS=(7 11 23 42 101)
 mkdir -p "$OUT"
-ate() { "$BUILD/bin/imm-monoslam" "$1" "$2" --out "$3" --no-gui --quiet | grep -o '= [0-9.]* % of path' | head -n 1 | tr -dc '0-9.'; }
-printf 'seed  full/no-objects  full/objects  ratio  imm7/objects  single/objects  full/still-boxes\n'
+ate() { "$BUILD/bin/imm-monoslam" "$1" "$2" --out "$3" --no-gui --quiet "${@:4}" | grep -o '= [0-9.]* % of path' | head -n 1 | tr -dc '0-9.'; }
+printf 'seed  full/no-objects  full/objects  ratio  imm7/objects  single/objects  full/still-boxes  refined/no-objects  refined/objects\n'
 STILL=()
 for k in 1 2 3; do STILL+=(--set "object$k.amplitude=0" --set "object$k.spin_deg_s=[0 0 0]"); done
 for s in "${SEEDS[@]}"; do
@@ -23,10 +25,15 @@ for s in "${SEEDS[@]}"; do
   done
   [ -d "$OUT/still-boxes-$s" ] || "$BUILD/bin/imm-render" ini/scenarios/handheld-moving.ini "$OUT/still-boxes-$s" \
     --seed "$s" "${STILL[@]}" > /dev/null
-  a=$(ate ini/imm7-shadow.ini "$OUT/handheld-$s" "$OUT/out-static-$s")
-  b=$(ate ini/imm7-shadow.ini "$OUT/handheld-moving-$s" "$OUT/out-moving-$s")
+  a=$(ate ini/imm7-shadow.ini "$OUT/handheld-$s" "$OUT/out-static-$s" --set output.refine_trajectory=true)
+  b=$(ate ini/imm7-shadow.ini "$OUT/handheld-moving-$s" "$OUT/out-moving-$s" --set output.refine_trajectory=true)
+  ra=$("$BUILD/bin/slam-eval" "$OUT/out-static-$s/trajectory_refined.txt" "$OUT/handheld-$s/groundtruth.txt" |
+       grep 'ATE / path' | awk '{print $5}')
+  rb=$("$BUILD/bin/slam-eval" "$OUT/out-moving-$s/trajectory_refined.txt" "$OUT/handheld-moving-$s/groundtruth.txt" |
+       grep 'ATE / path' | awk '{print $5}')
   c=$(ate ini/imm7.ini "$OUT/handheld-moving-$s" "$OUT/out-noshadow-$s")
   d=$(ate ini/single.ini "$OUT/handheld-moving-$s" "$OUT/out-single-$s")
   e=$(ate ini/imm7-shadow.ini "$OUT/still-boxes-$s" "$OUT/out-still-$s")
-  printf '%-5s %-16s %-13s %-6s %-13s %-15s %s\n' "$s" "$a" "$b" "$(awk -v a="$a" -v b="$b" 'BEGIN{printf "%.2f", b/a}')" "$c" "$d" "$e"
+  printf '%-5s %-16s %-13s %-6s %-13s %-15s %-17s %-19.2f %.2f\n' "$s" "$a" "$b" \
+    "$(awk -v a="$a" -v b="$b" 'BEGIN{printf "%.2f", b/a}')" "$c" "$d" "$e" "$ra" "$rb"
 done

@@ -175,6 +175,34 @@ TEST(SystemRealData, ExactGroundTruthAndLongRealRunAgreeWithTheirMeasurements)
   EXPECT_LT(cross.rmseOverPath, 0.003);
 }
 
+TEST(SystemOutputs, RefinedTrajectoryOnlyWhenAsked)
+{
+  // [output] refine_trajectory: trajectory_refined.txt (the poses that measure >= 6 features, in the
+  // filter's frame), closer to the truth than the filter's; not written unless asked.
+  const std::vector<std::string> base{sourceDir() + "/ini/imm7-shadow.ini", "--frames", "120", "--set",
+                                      "input.scenario=scenarios/handheld.ini", "--set", "output.plots=false"};
+  auto args = base;
+  const auto plain = outDir("refine_off");
+  args.insert(args.end(), {"--out", plain});
+  ASSERT_EQ(runApp(args), 0);
+  EXPECT_FALSE(std::filesystem::exists(plain + "/trajectory_refined.txt"));
+
+  args = base;
+  const auto refined = outDir("refine_on");
+  args.insert(args.end(), {"--out", refined, "--set", "output.refine_trajectory=true"});
+  app::TRunSummary s;
+  ASSERT_EQ(runApp(args, &s), 0);
+  const auto traj = eval::readTumTrajectory(refined + "/trajectory_refined.txt");
+  EXPECT_GE(traj.size(), 110u);
+  EXPECT_LE(traj.size(), 120u);
+  ASSERT_TRUE(s.ate && s.ateRefined);
+  std::printf("handheld 120 frames: filter %.3f %%, refined %.3f %% of path (%.2f s)\n", 100 * s.ate->rmseOverPath,
+              100 * s.ateRefined->rmseOverPath, s.refineSeconds);
+  EXPECT_LT(s.ateRefined->rmseOverPath, s.ate->rmseOverPath);
+  // The filter's own outputs do not change.
+  EXPECT_EQ(readFile(plain + "/trajectory.txt"), readFile(refined + "/trajectory.txt"));
+}
+
 TEST(SystemOutputs, ContractFilesAndDeterminism)
 {
   // Two runs of the same input and config: the estimates are byte-identical (timings aside).

@@ -6,6 +6,7 @@
 #include <immslam/app/app_options.h>
 #include <immslam/camera/mrpt_camera.h>
 #include <immslam/core/config.h>
+#include <immslam/eval/reprojection.h>
 #include <immslam/eval/statistics.h>
 #include <immslam/io/CImageSource.h>
 #include <immslam/io/CLiveCameraSource.h>
@@ -91,6 +92,35 @@ std::string formatSeconds(double s)
   else
     o << std::fixed << std::setprecision(0) << s << "s";
   return o.str();
+}
+
+/** [output] refine_trajectory: bundle adjustment of the run's own matches (the filter's trajectory as
+ * the start), written to trajectory_refined.txt, with its ATE when the input has ground truth. */
+void refineTrajectory(const std::vector<eval::TSearchRow>& rows, const COutputFiles& out,
+                      const camera::CCameraModel& cam, const std::optional<eval::TTrajectory>& gt,
+                      TRunSummary& summary, mrpt::system::COutputLogger& log)
+{
+  const auto t0 = std::chrono::steady_clock::now();
+  try
+  {
+    eval::TBundleProblem prob = eval::makeBundleProblem(rows, out.trajectory(), cam, 1e-6, 8, 6);
+    const double before = eval::reprojectionStats(prob).rmsPx;
+    const eval::TBundleResult r = eval::bundleAdjust(prob);
+    const double after = eval::reprojectionStats(prob).rmsPx;
+    eval::writeTumTrajectory(prob.poses, out.path("trajectory_refined.txt"));
+    summary.refineSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::ostringstream m;
+    m << std::fixed << std::setprecision(3) << "trajectory_refined.txt: " << prob.poses.size() << " poses, "
+      << prob.points.size() << " features, " << prob.obs.size() << " matches; reprojection RMS " << before << " -> "
+      << after << " px in " << r.iterations << " iterations, " << std::setprecision(2) << summary.refineSeconds
+      << " s";
+    log.logStr(mrpt::system::LVL_INFO, m.str());
+    if (gt && prob.poses.size() >= 3) summary.ateRefined = eval::computeAte(prob.poses, *gt, eval::EAlignment::Sim3, 0.01);
+  }
+  catch (const std::exception& e)
+  {
+    log.logStr(mrpt::system::LVL_WARN, std::string("no refined trajectory: ") + e.what());
+  }
 }
 }  // namespace
 
@@ -244,6 +274,8 @@ int CImmMonoSlamApp::runImpl()
   }
 
   // ---- Frames
+  // The matches used in the updates, kept for the final bundle adjustment ([output] refine_trajectory).
+  std::vector<eval::TSearchRow> refineRows;
   const bool tty = !m_args.quiet && isatty(fileno(stderr));
   const std::size_t total = source->sizeHint();
   std::vector<double> frameMs, matched;
@@ -326,6 +358,23 @@ int CImmMonoSlamApp::runImpl()
       else if (const auto it = folderLabels.find(std::llround(frame.timestamp * 1e6)); it != folderLabels.end())
         labels.push_back(it->second);
     }
+    if (outOpts.refine_trajectory)
+      for (const auto& sr : fr->slam->searches)
+        if (sr.status == slam::TSearchRecord::EStatus::LowInnovationInlier ||
+            sr.status == slam::TSearchRecord::EStatus::RescuedInlier)
+        {
+          eval::TSearchRow row;
+          row.timestamp = fr->slam->timestamp;
+          row.featureId = sr.id;
+          row.h = sr.h;
+          row.S = sr.S;
+          row.found = true;
+          row.z = sr.z;
+          row.score = sr.score;
+          row.status = sr.status == slam::TSearchRecord::EStatus::RescuedInlier ? eval::ESearchStatus::Rescued
+                                                                                : eval::ESearchStatus::Inlier;
+          refineRows.push_back(row);
+        }
     ++m_summary.framesProcessed;
     frameMs.push_back(fr->totalMs);
     matched.push_back(fr->slam->nMatched);
@@ -371,7 +420,8 @@ int CImmMonoSlamApp::runImpl()
       logStr(mrpt::system::LVL_WARN, std::string("no ATE: ") + e.what());
     }
   }
- std::vector<std::string> warnings;
+  if (outOpts.refine_trajectory) refineTrajectory(refineRows, out, *cam, source->groundTruth(), m_summary, *this);
+  std::vector<std::string> warnings;
   visuals.finish(sys->slam(), out.trajectory(), source->groundTruth(), m_summary.ate, labels, warnings);
   for (const auto& w : warnings) logStr(mrpt::system::LVL_WARN, w);
   std::ostringstream s;
@@ -390,6 +440,8 @@ int CImmMonoSlamApp::runImpl()
       s << " (the ground-truth camera did not move)";
     s << " (" << m_summary.ate->nPairs << " poses)";
   }
+  if (m_summary.ateRefined && m_summary.ateRefined->pathLength > 0)
+    s << std::setprecision(2) << "; refined " << 100 * m_summary.ateRefined->rmseOverPath << " % of path";
   if (!m_summary.endReason.empty()) s << "; ended: " << m_summary.endReason;
   s << "; outputs in " << m_args.outDir;
   std::cout << s.str() << std::endl;

@@ -47,6 +47,8 @@ struct TRunSummary
   int finalMapSize = 0;
   double medianMatched = 0;
   std::optional<eval::TAteResult> ate;   ///< against the input's ground truth, when it has one
+  std::optional<eval::TAteResult> ateRefined;  ///< the same for trajectory_refined.txt ([output] refine_trajectory)
+  double refineSeconds = 0;              ///< time of the final bundle adjustment
   std::string outDir;
 };
 
