@@ -82,6 +82,24 @@ eval::TBundleProblem refinedFrom(const std::string& out, const eval::TTrajectory
   EXPECT_LT(eval::reprojectionStats(p).rmsPx, 1.0);
   return p;
 }
+
+/** A run of CONFIG on a shared sequence with its searches logged, and the adjustment of its matches. */
+struct TRefinedRun
+{
+  eval::TTrajectory est;
+  eval::TBundleProblem ba;
+};
+TRefinedRun runAndRefine(const std::string& config, const std::string& data, const std::string& name)
+{
+  const auto out = outDir(name);
+  EXPECT_EQ(runApp({sourceDir() + "/ini/" + config, sharedData(data), "--out", out, "--set", "output.plots=false",
+                    "--set", "output.search_log=true"}),
+            0);
+  TRefinedRun r;
+  r.est = eval::readTumTrajectory(out + "/trajectory.txt");
+  r.ba = refinedFrom(out, r.est, sharedData(data) + "/calib.txt");
+  return r;
+}
 }  // namespace
 
 TEST(SystemRealData, VispRbtGroundTruthDisagreesWithTheImagesAndTheEstimateAgrees)
@@ -144,12 +162,9 @@ TEST(SystemRealData, ExactGroundTruthAndLongRealRunAgreeWithTheirMeasurements)
     EXPECT_EQ(st.featuresAbove, 0u);
     EXPECT_LT(st.rmsPx, 0.6);
   }
-  const auto out = outDir("testseq_reprojection");
-  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("monoslam_testseq"), "--out", out, "--set",
-                    "output.plots=false", "--set", "output.search_log=true"}),
-            0);
-  const auto est = eval::readTumTrajectory(out + "/trajectory.txt");
-  const auto ba = refinedFrom(out, est, sharedData("monoslam_testseq") + "/calib.txt");
+  const auto full = runAndRefine("imm7-shadow.ini", "monoslam_testseq", "testseq_reprojection");
+  const auto& est = full.est;
+  const auto& ba = full.ba;
   const auto ate = eval::computeAte(est, ba.poses);
   std::printf("testseq: estimate vs a bundle adjustment of its measurements: %.3f %% of path, %.2f %% of extent "
               "(%zu poses)\n",
@@ -160,12 +175,7 @@ TEST(SystemRealData, ExactGroundTruthAndLongRealRunAgreeWithTheirMeasurements)
   // A less circular reference: the adjustment of an independent run's matches (the single model's).
   // Measured: the two adjustments 0.08 % of path apart, the full system 0.12 % (0.87 % of extent)
   // from the single model's.
-  const auto outSingle = outDir("testseq_reprojection_single");
-  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", sharedData("monoslam_testseq"), "--out", outSingle, "--set",
-                    "output.plots=false", "--set", "output.search_log=true"}),
-            0);
-  const auto baSingle = refinedFrom(outSingle, eval::readTumTrajectory(outSingle + "/trajectory.txt"),
-                                    sharedData("monoslam_testseq") + "/calib.txt");
+  const auto baSingle = runAndRefine("single.ini", "monoslam_testseq", "testseq_reprojection_single").ba;
   const auto between = eval::computeAte(ba.poses, baSingle.poses);
   const auto cross = eval::computeAte(est, baSingle.poses);
   std::printf("testseq: adjustments of two runs %.3f %% of path apart; full system vs the single model's adjustment "
