@@ -155,6 +155,20 @@ double robustCost(const std::vector<TPoseCW>& cams, const std::vector<Vec3>& X, 
   }
   return n == 0 ? 0 : c / static_cast<double>(n);
 }
+/** Every point triangulated from the fixed poses (observations are grouped by point). */
+void triangulatePoints(TBundleProblem& p)
+{
+  const auto cams = cameras(p);
+  std::size_t first = 0;
+  while (first < p.obs.size())
+  {
+    std::size_t last = first;
+    while (last < p.obs.size() && p.obs[last].point == p.obs[first].point) ++last;
+    Vec3 X = p.points[p.obs[first].point];
+    if (triangulatePoint(cams, p.obs, first, last, p.fx, p.fy, X)) p.points[p.obs[first].point] = X;
+    first = last;
+  }
+}
 }  // namespace
 
 bool reprojectionResidual(const Mat3& R_CW, const Vec3& t_CW, const Vec3& X_W, const Vec2& xn, double fx,
@@ -252,7 +266,7 @@ TBundleProblem makeBundleProblem(const std::vector<TSearchRow>& rows, const TTra
                              std::to_string(used) + " matches used in updates, " + std::to_string(joined) +
                              " joined to a pose within " + std::to_string(maxDt) + " s)");
   p.points.assign(p.featureIds.size(), Vec3::Zero());
-  triangulateAll(p);
+  triangulatePoints(p);
   return p;
 }
 
@@ -295,16 +309,7 @@ TReprojectionStats reprojectionStats(const TBundleProblem& p, double thresholdPx
 
 TReprojectionStats triangulateAll(TBundleProblem& p, double thresholdPx)
 {
-  const auto cams = cameras(p);
-  std::size_t first = 0;
-  while (first < p.obs.size())
-  {
-    std::size_t last = first;
-    while (last < p.obs.size() && p.obs[last].point == p.obs[first].point) ++last;
-    Vec3 X = p.points[p.obs[first].point];
-    if (triangulatePoint(cams, p.obs, first, last, p.fx, p.fy, X)) p.points[p.obs[first].point] = X;
-    first = last;
-  }
+  triangulatePoints(p);
   return reprojectionStats(p, thresholdPx);
 }
 
@@ -330,6 +335,8 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
   if (p.obs.empty()) return res;
 
   double lambda = 1e-4;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  bool analysed = false;
   for (res.iterations = 0; res.iterations < opts.maxIterations; ++res.iterations)
   {
     // Normal equations J^T W J d = -J^T W r (r = z - h, so J = d r / d params).
@@ -357,16 +364,23 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
       }
     }
     for (int a = 0; a < 6; ++a) trip.emplace_back(a, a, 1e10);  // gauge: the first pose stays
+    for (int i = 0; i < n; ++i) trip.emplace_back(i, i, 0.0);   // the whole diagonal in the pattern (damping)
     Eigen::SparseMatrix<double> H(n, n);
     H.setFromTriplets(trip.begin(), trip.end());
     const VecX diag = H.diagonal();
+    // The sparsity pattern is the same for every iteration and damping: ordered and analysed once.
+    if (!analysed)
+    {
+      ldlt.analyzePattern(H);
+      analysed = true;
+    }
 
     bool accepted = false;
     while (!accepted && lambda <= 1e8)
     {
       Eigen::SparseMatrix<double> A = H;
       for (int i = 0; i < n; ++i) A.coeffRef(i, i) += lambda * diag[i] + 1e-12;
-      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
+      ldlt.factorize(A);
       if (ldlt.info() != Eigen::Success)
       {
         lambda *= 10;
