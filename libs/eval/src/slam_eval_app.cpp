@@ -83,6 +83,16 @@ double parseNumber(const std::string& name, const std::string& s, double lo, dou
   return v;
 }
 
+/** The value of option `name` as a number in [lo, hi], or `def` when the option is absent. */
+double numberOr(const TParsed& p, const std::string& name, double lo, double hi, double def)
+{
+  const auto v = p.value(name);
+  return v ? parseNumber(name, *v, lo, hi) : def;
+}
+
+/** Largest timestamp difference when joining files (`--max-dt`, default 0.1 ms). */
+double maxDtOption(const TParsed& p) { return numberOr(p, "--max-dt", 0, 1e9, 1e-4); }
+
 void requirePositional(const TParsed& p, std::size_t n, const std::string& what)
 {
   if (p.positional.size() != n)
@@ -147,8 +157,8 @@ int runSegmentation(const std::string& prog, const std::vector<std::string>& arg
   const TParsed p = parse(args, 2, {"--exclude", "--max-dt"});
   if (p.help) return out << segmentationUsage(prog), 0;
   requirePositional(p, 2, "model_probabilities.csv motion_labels.txt");
-  const double exclude = p.value("--exclude") ? parseNumber("--exclude", *p.value("--exclude"), 0, 1e9) : 0.5;
-  const double maxDt = p.value("--max-dt") ? parseNumber("--max-dt", *p.value("--max-dt"), 0, 1e9) : 1e-4;
+  const double exclude = numberOr(p, "--exclude", 0, 1e9, 0.5);
+  const double maxDt = maxDtOption(p);
   const TModelProbabilities probs = readModelProbabilitiesCsv(p.positional[0]);
   const TMotionLabels labels = readMotionLabels(p.positional[1]);
   if (probs.times.empty()) throw std::runtime_error(p.positional[0] + ": no rows");
@@ -175,7 +185,7 @@ int runClassification(const std::string& prog, const std::vector<std::string>& a
   requirePositional(p, 1, "classifications.csv");
   const auto masks = p.value("--masks"), points = p.value("--points");
   if (masks.has_value() == points.has_value()) throw TUsageError("give exactly one of --masks DIR and --points FILE");
-  const double maxDt = p.value("--max-dt") ? parseNumber("--max-dt", *p.value("--max-dt"), 0, 1e9) : 1e-4;
+  const double maxDt = maxDtOption(p);
   double radius = masks ? 1 : 3;
   if (const auto rv = p.value("--radius"))
   {
@@ -210,13 +220,12 @@ int runTracks(const std::string& prog, const std::vector<std::string>& args, std
                   : rendered      ? std::optional<std::string>((std::filesystem::path(truthPath) / "groundtruth.txt").string())
                                   : std::nullopt;
   if (!est || !gt) throw TUsageError("--est trajectory.txt and --gt groundtruth.txt are needed (the alignment)");
-  const double maxDt = p.value("--max-dt") ? parseNumber("--max-dt", *p.value("--max-dt"), 0, 1e9) : 1e-4;
+  const double maxDt = maxDtOption(p);
   // A rendered folder's truth is computed at each row's own pixel: a sub-pixel radius joins it.
-  const double radius = p.value("--radius") ? parseNumber("--radius", *p.value("--radius"), 0, 1e4) : rendered ? 0.5 : 3;
+  const double radius = numberOr(p, "--radius", 0, 1e4, rendered ? 0.5 : 3);
   const TAteResult ate = computeAte(readTumTrajectory(*est), readTumTrajectory(*gt), EAlignment::Sim3, 0.01);
   const auto samples = readTracksCsv(p.positional[0]);
-  const double maxRel =
-      p.value("--max-rel-sigma") ? parseNumber("--max-rel-sigma", *p.value("--max-rel-sigma"), 1e-12, 1e12) : 0.5;
+  const double maxRel = numberOr(p, "--max-rel-sigma", 1e-12, 1e12, 0.5);
   std::string truthReport;
   const auto points = rendered ? truth.renderedTrackTruth(truthPath, samples, maxDt, truthReport)
                                : readPointsGroundTruth(truthPath);
@@ -271,16 +280,12 @@ int runReprojection(const std::string& prog, const std::vector<std::string>& arg
   if (p.help) return out << reprojectionUsage(prog), 0;
   requirePositional(p, 2, "searches.csv POSES.txt");
   if (!p.value("--calib")) throw TUsageError("--calib is required (the camera of the run)");
-  const int minViews =
-      p.value("--min-views") ? static_cast<int>(parseNumber("--min-views", *p.value("--min-views"), 2, 1e9)) : 8;
-  const int minPerPose = p.value("--min-per-pose")
-                             ? static_cast<int>(parseNumber("--min-per-pose", *p.value("--min-per-pose"), 1, 1e9))
-                             : 6;
-  const double maxDt = p.value("--max-dt") ? parseNumber("--max-dt", *p.value("--max-dt"), 0, 1e9) : 1e-4;
+  const int minViews = static_cast<int>(numberOr(p, "--min-views", 2, 1e9, 8));
+  const int minPerPose = static_cast<int>(numberOr(p, "--min-per-pose", 1, 1e9, 6));
+  const double maxDt = maxDtOption(p);
   TBundleOptions bo;
-  if (p.value("--huber")) bo.huberPx = parseNumber("--huber", *p.value("--huber"), 1e-3, 1e6);
-  if (p.value("--iterations"))
-    bo.maxIterations = static_cast<int>(parseNumber("--iterations", *p.value("--iterations"), 1, 1e6));
+  bo.huberPx = numberOr(p, "--huber", 1e-3, 1e6, bo.huberPx);
+  bo.maxIterations = static_cast<int>(numberOr(p, "--iterations", 1, 1e6, bo.maxIterations));
   const auto cam = camera::loadCalibFile(*p.value("--calib"));
   const auto rows = readSearchesCsv(p.positional[0]);
   const TTrajectory poses = readTumTrajectory(p.positional[1]);
@@ -315,8 +320,7 @@ int runNis(const std::string& prog, const std::vector<std::string>& args, std::o
   const TParsed p = parse(args, 2, {"--confidence"});
   if (p.help) return out << nisUsage(prog), 0;
   requirePositional(p, 1, "searches.csv");
-  const double conf = p.value("--confidence") ? parseNumber("--confidence", *p.value("--confidence"), 1e-9, 1 - 1e-9)
-                                              : 0.95;
+  const double conf = numberOr(p, "--confidence", 1e-9, 1 - 1e-9, 0.95);
   const auto rows = readSearchesCsv(p.positional[0]);
   out << "searches     : " << p.positional[0] << "\n" << computeSearchNis(rows, conf).summary();
   return 0;
