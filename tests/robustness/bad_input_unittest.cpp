@@ -22,6 +22,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <random>
 
 #include <unistd.h>
@@ -326,6 +327,39 @@ TEST(RobustDataset, MalformedRgbLinesAndMissingFilesAreSkippedAndCounted)
   EXPECT_TRUE(contains(r.summary.skipReasons[5], lines[13].path)) << r.summary.skipReasons[5];
   const auto o = readAndCheckOutputs(d + "/out");
   EXPECT_EQ(o.traj.size(), 34u);
+}
+
+TEST(RobustDataset, TimestampsThatDoNotAdvanceAreSkippedAndCounted)
+{
+  // A stamp going back (a clock reset, a hand-edited list) and a repeated one: both frames are skipped
+  // with their file named, the frames after them are processed normally (the interval to the next
+  // frame is measured from the last processed one, not from the bad stamp), and the time series stay
+  // monotonic.
+  const std::string d = copyBase("timestamps_backwards");
+  auto lines = readRgb(d);
+  ASSERT_EQ(lines.size(), 40u);
+  lines[17].stamp = "0.1";
+  lines[25].stamp = lines[24].stamp;
+  writeRgb(d, lines);
+  const auto r = runApp({kSingle, d, "--out", d + "/out"});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.summary.framesSkipped, 2u);
+  EXPECT_EQ(r.summary.framesProcessed, 38u);
+  ASSERT_EQ(r.summary.skipReasons.size(), 2u);
+  EXPECT_TRUE(contains(r.summary.skipReasons[0], lines[17].path)) << r.summary.skipReasons[0];
+  EXPECT_TRUE(contains(r.summary.skipReasons[0], "not after the previous")) << r.summary.skipReasons[0];
+  EXPECT_TRUE(contains(r.summary.skipReasons[1], lines[25].path)) << r.summary.skipReasons[1];
+  const auto o = readAndCheckOutputs(d + "/out");
+  EXPECT_EQ(o.traj.size(), 38u);
+  // The frame after a skipped one comes two periods after the last processed one, as after any dropped
+  // frame; none is taken for a long gap in the video (the backward stamp would make it 15 periods).
+  const auto stats = readLines(d + "/out/frame_stats.csv");
+  ASSERT_GE(stats.size(), 2u);
+  const auto header = splitFields(stats[0], ',');
+  const auto col = std::find(header.begin(), header.end(), "dt_frames") - header.begin();
+  ASSERT_LT(col, static_cast<std::ptrdiff_t>(header.size()));
+  for (std::size_t i = 2; i < stats.size(); ++i)
+    EXPECT_LE(std::stod(splitFields(stats[i], ',')[static_cast<std::size_t>(col)]), 2.0) << stats[i];
 }
 
 TEST(RobustDataset, UnreadableImagesAreSkippedAndCounted)

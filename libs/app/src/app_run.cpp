@@ -26,6 +26,7 @@
 #include <iomanip>
 #include <map>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 namespace immslam::app
@@ -283,6 +284,7 @@ int CImmMonoSlamApp::runImpl()
   auto lastProgress = tStart;
   io::TFrame frame;
   std::string why;
+  double lastTimestamp = -std::numeric_limits<double>::infinity();
   for (;;)
   {
     if (m_stop)
@@ -306,6 +308,16 @@ int CImmMonoSlamApp::runImpl()
     if (st == io::ENextStatus::Skipped)
     {
       skip(why);
+      continue;
+    }
+    if (!(frame.timestamp > lastTimestamp))
+    {
+      // Time must run forward: the motion models integrate over it and the outputs are time series.
+      std::ostringstream s;
+      s.precision(9);
+      s << "frame " << frame.index << " (" << frame.origin << "): timestamp " << frame.timestamp
+        << " is not after the previous frame's " << lastTimestamp;
+      skip(s.str());
       continue;
     }
     if (guessCalibration)
@@ -376,6 +388,7 @@ int CImmMonoSlamApp::runImpl()
           refineRows.push_back(row);
         }
     ++m_summary.framesProcessed;
+    lastTimestamp = frame.timestamp;
     frameMs.push_back(fr->totalMs);
     matched.push_back(fr->slam->nMatched);
 

@@ -63,7 +63,10 @@ void CMonoSlamIMM::initialiseState()
 double CMonoSlamIMM::frameDt(double t)
 {
   const double delta = t - m_lastTimestamp;
-  m_lastTimestamp = t;
+  // A timestamp that does not advance counts as one frame and does not move the clock back: the
+  // next frame's interval is measured from the latest time seen (callers should not send such
+  // frames; the application skips them).
+  if (delta > 0) m_lastTimestamp = t;
   if (m_opts.frame_rate_hz > 0)
     m_framePeriod = 1.0 / m_opts.frame_rate_hz;
   else if (delta > 0 && m_firstDeltas.size() < 9)

@@ -614,6 +614,24 @@ TEST(IMMSlam, DroppedFramesGiveTheModesTheTimeToSwitch)
   }
 }
 
+TEST(IMMSlam, ATimestampThatGoesBackCountsAsOneFrameAndDoesNotMoveTheClockBack)
+{
+  // Frames 0, 1, 2, then a stamp at frame 0.5 (going back) and frame 3: the bad one is one frame, and
+  // frame 3 is one period after frame 2 (not 2.5 periods after the bad stamp). The same for NaN.
+  const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
+  CMonoSlamIMM::TOptions o;
+  o.num_threads = 1;
+  CMonoSlamIMM slam(o, TIMMBankOptions(), COnePointRansac::TOptions(), cam);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<std::pair<double, double>> frames = {{0, 0}, {1, 1}, {2, 1}, {0.5, 1}, {3, 1}, {nan, 1}, {4, 1}};
+  for (const auto& [k, steps] : frames)
+  {
+    const auto& rep = slam.processMeasurements(k / 30.0, {});
+    if (k == 0) continue;
+    EXPECT_DOUBLE_EQ(rep.dtFrames, steps) << "frame at " << k;
+  }
+}
+
 // ---- Relocalisation (relocalise.h, applyPoseCorrection) ----
 
 TEST(Relocalisation, PoseCorrectionKeepsTheWorldAndMatchesNumericalJacobians)
