@@ -145,16 +145,27 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
     }
     // Map management: new features where the image is empty of SLAM and shadow features.
     const auto& so = m_slam->options();
+    // SLAM with nothing in view measures no camera motion: a new first map of [slam] initial_features,
+    // as at the first frame, straight in SLAM even with the shadow filter, which could only classify
+    // against a dead-reckoned camera (the IMM's stationary and rotation models keep the depths open).
+    const bool firstMap = !holding && slamInView + m_frame.promoted == 0;
     const int visible = slamInView + pendingVisible;
-    const int want = holding ? 0 : std::clamp(so.min_visible_features - visible, 0, so.max_new_features_per_frame);
+    const int want = holding    ? 0
+                     : firstMap ? so.initial_features
+                                : std::clamp(so.min_visible_features - visible, 0, so.max_new_features_per_frame);
     if (want > 0)
     {
       std::vector<Vec2> uv;
       for (const auto& c : m_slam->findNewFeatureCandidates(grey, want, avoid)) uv.push_back(c.uv);
-      if (m_shadow)
+      if (m_shadow && !firstMap)
         m_frame.newShadow = static_cast<int>(m_shadow->addFeatures(grey, uv).size());
       else
-        m_slam->addFeaturesAt(grey, uv);
+      {
+        const auto added = m_slam->addFeaturesAt(grey, uv);
+        if (firstMap)
+          m_frame.newFirstMap =
+              static_cast<int>(std::count_if(added.begin(), added.end(), [](auto id) { return id >= 0; }));
+      }
     }
   }
   m_prevR = m_slam->cameraPosition();

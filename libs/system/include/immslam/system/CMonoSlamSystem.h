@@ -29,6 +29,10 @@ struct TSystemFrame
   int released = 0;     ///< of which released unresolved (SLAM short of features)
   int handedOver = 0;   ///< SLAM features handed to the shadow filter (caught moving)
   int newShadow = 0;    ///< new features given to the shadow filter
+  /** New features put straight into SLAM as a new first map: SLAM had no feature in view, so there was
+   * no measured camera motion to classify anything against (a blank start, a map given up, a view
+   * the map has left entirely). */
+  int newFirstMap = 0;
   double shadowMs = 0;  ///< wall time of the shadow filter
   double totalMs = 0;   ///< wall time of processFrame (image decoding excluded)
 };
