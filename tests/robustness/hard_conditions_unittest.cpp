@@ -556,29 +556,34 @@ TEST(RobustConditions, AppOutputsStayValidThroughBlackoutAndGap)
 TEST(RobustDeterminism, SameOutputsOnRepeatsAndAnyThreadCount)
 {
   // Every run is reproducible: the same damaged input and config give byte-identical estimates
-  // (trajectory, model probabilities, map, per-frame counts) on repeated runs and with 1, 2 or 4
-  // worker threads.
+  // (trajectory, model probabilities, map, per-frame counts; with the shadow filter also its
+  // classifications and tracks) on repeated runs and with 1, 2 or 4 worker threads.
   const std::string d = freshDir("determinism");
   const auto estimates = [&](const std::string& out) {
     std::string all;
-    for (const auto* f : {"trajectory.txt", "model_probabilities.csv", "map.csv"}) all += test::readFile(out + "/" + f);
+    for (const auto* f : {"trajectory.txt", "model_probabilities.csv", "map.csv", "classifications.csv", "tracks.csv"})
+      all += test::readFile(out + "/" + f);
     for (const auto& row : test::readCsv(out + "/frame_stats.csv"))
       for (std::size_t j = 0; j < 7 && j < row.size(); ++j) all += row[j] + ",";  // timings excluded
     return all;
   };
-  std::string first;
-  int n = 0;
-  for (const char* threads : {"2", "2", "1", "4"})
+  for (const char* cfg : {"ini/imm7.ini", "ini/imm7-shadow.ini"})
   {
-    const std::string out = d + "/run" + std::to_string(n++);
-    const auto r = runApp({src("ini/imm7.ini"), damagedFolder(), "--frames", "150", "--set",
-                           std::string("slam.num_threads=") + threads, "--out", out});
-    ASSERT_EQ(r.status, 0) << r.err;
-    const std::string e = estimates(out);
-    ASSERT_GT(e.size(), 1000u);
-    if (first.empty())
-      first = e;
-    else
-      EXPECT_TRUE(e == first) << "run " << n << " (num_threads " << threads << ") differs from the first";
+    SCOPED_TRACE(cfg);
+    std::string first;
+    int n = 0;
+    for (const char* threads : {"2", "2", "1", "4"})
+    {
+      const std::string out = d + "/run" + std::to_string(n++);
+      const auto r = runApp({src(cfg), damagedFolder(), "--frames", "150", "--set",
+                             std::string("slam.num_threads=") + threads, "--out", out});
+      ASSERT_EQ(r.status, 0) << r.err;
+      const std::string e = estimates(out);
+      ASSERT_GT(e.size(), 1000u);
+      if (first.empty())
+        first = e;
+      else
+        EXPECT_TRUE(e == first) << "run " << n << " (num_threads " << threads << ") differs from the first";
+    }
   }
 }
