@@ -17,6 +17,7 @@
 #include <mrpt/obs/CObservationIMU.h>
 #include <mrpt/obs/CObservationImage.h>
 #include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/obs/CObservationStereoImages.h>
 #include <mrpt/serialization/CArchive.h>
 
 #include <opencv2/imgcodecs.hpp>
@@ -237,6 +238,79 @@ TEST(RobustRawlog, OtherObservationTypesAreSkippedAndCounted)
   EXPECT_TRUE(contains(r.summary.skipReasons[0], "CObservation")) << r.summary.skipReasons[0];
   const auto o = readAndCheckOutputs(d + "/out");
   EXPECT_EQ(o.traj.size(), 20u);
+}
+
+/** The first n frames of the base dataset as a stereo rig's rawlog: CObservationStereoImages
+ * (label BUMBLEBEE: the frame left, its mirror image right) when `asStereo`, else two
+ * CObservationImage per frame (labels LEFT: the frame, RIGHT: its mirror image), calibrated. */
+std::string writeTwoCameraRawlog(const std::string& path, int n, bool asStereo)
+{
+  const auto lines = readRgb(baseDataset());
+  const auto tcam = camera::toTCamera(*camera::loadCalibFile(baseDataset() + "/calib.txt"));
+  mrpt::io::CFileGZOutputStream f(path);
+  auto a = mrpt::serialization::archiveFrom(f);
+  for (int i = 0; i < n; ++i)
+  {
+    const double t = std::stod(lines[i].stamp);
+    const cv::Mat grey = cv::imread(baseDataset() + "/" + lines[i].path, cv::IMREAD_GRAYSCALE);
+    cv::Mat mirror;
+    cv::flip(grey, mirror, 1);
+    if (asStereo)
+    {
+      auto st = mrpt::obs::CObservationStereoImages::Create();
+      st->sensorLabel = "BUMBLEBEE";
+      st->timestamp = mrpt::Clock::fromDouble(t);
+      st->imageLeft = mrpt::img::CImage(grey, mrpt::img::DEEP_COPY);
+      st->imageRight = mrpt::img::CImage(mirror, mrpt::img::DEEP_COPY);
+      st->hasImageRight = true;
+      if (tcam) st->leftCamera = st->rightCamera = *tcam;
+      a << *st;
+      continue;
+    }
+    for (const bool left : {true, false})
+    {
+      auto img = mrpt::obs::CObservationImage::Create();
+      img->sensorLabel = left ? "LEFT" : "RIGHT";
+      img->timestamp = mrpt::Clock::fromDouble(t);
+      img->image = mrpt::img::CImage(left ? grey : mirror, mrpt::img::DEEP_COPY);
+      if (tcam) img->cameraParams = *tcam;
+      a << *img;
+    }
+  }
+  return path;
+}
+
+TEST(RobustRawlog, StereoRigRawlogsRunOnOneCamera)
+{
+  // A stereo rig's rawlog, as MRPT logs it (CObservationStereoImages) or as two monocular sensors: the
+  // run uses one camera (the left image; the first sensor, or [input] rawlog_sensor_label), never the
+  // two interleaved; the other camera's 40 images are counted, only the first 20 logged.
+  const std::string d = freshDir("stereo_rawlog");
+  const std::string stereo = writeTwoCameraRawlog(d + "/stereo.rawlog", 40, true);
+  const auto r = runApp({kSingle, stereo, "--out", d + "/out_stereo"});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.summary.framesProcessed, 40u);
+  EXPECT_EQ(r.summary.framesSkipped, 0u);
+  EXPECT_EQ(readAndCheckOutputs(d + "/out_stereo").traj.size(), 40u);
+
+  const std::string two = writeTwoCameraRawlog(d + "/two.rawlog", 40, false);
+  const auto first = runApp({kSingle, two, "--out", d + "/out_first"});
+  EXPECT_EQ(first.status, 0) << first.err;
+  EXPECT_EQ(first.summary.framesProcessed, 40u);
+  EXPECT_EQ(first.summary.framesSkipped, 40u);
+  ASSERT_EQ(first.summary.skipReasons.size(), 20u);  // the ones logged (the warning names the sensors:
+  for (const auto& why : first.summary.skipReasons)  // Rawlog.SeveralCamerasTheFirstOrTheOneChosenBySensorLabel)
+    EXPECT_TRUE(contains(why, "image of sensor 'RIGHT' skipped")) << why;
+  const auto right = runApp({kSingle, two, "--out", d + "/out_right", "--set", "input.rawlog_sensor_label=RIGHT"});
+  EXPECT_EQ(right.status, 0) << right.err;
+  EXPECT_EQ(right.summary.framesProcessed, 40u);
+  // The RIGHT camera saw the mirror image: its trajectory is not the LEFT one's.
+  const auto tl = readAndCheckOutputs(d + "/out_first").traj, tr = readAndCheckOutputs(d + "/out_right").traj;
+  ASSERT_EQ(tl.size(), tr.size());
+  EXPECT_NE(test::readFile(d + "/out_first/trajectory.txt"), test::readFile(d + "/out_right/trajectory.txt"));
+  const auto bad = runApp({kSingle, two, "--out", d + "/out_bad", "--set", "input.rawlog_sensor_label=FRONT"});
+  EXPECT_EQ(bad.status, 1);
+  EXPECT_TRUE(contains(bad.err, "no image of sensor 'FRONT'")) << bad.err;
 }
 
 TEST(RobustRawlog, NoImagesIsAnErrorNamingTheFile)

@@ -9,6 +9,7 @@ void TInputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, c
   IMMSLAM_LOAD_STRING(source);
   IMMSLAM_LOAD_STRING(scenario);
   IMMSLAM_LOAD_DOUBLE(live_frame_rate_hz);
+  IMMSLAM_LOAD_STRING(rawlog_sensor_label);
   core::requirePositive(live_frame_rate_hz, s, "live_frame_rate_hz");
   if (source.empty()) throw std::runtime_error("[" + s + "] source: empty (use 'synthetic' or a path)");
 }
@@ -18,6 +19,7 @@ void TInputOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std
   MRPT_SAVE_CONFIG_VAR_COMMENT(source, "synthetic | path of a .rawlog or dataset folder");
   MRPT_SAVE_CONFIG_VAR_COMMENT(scenario, "scenario of the synthetic source (empty: built-in default)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(live_frame_rate_hz, "frame rate of live sources without timestamps");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(rawlog_sensor_label, "camera (sensorLabel) of a rawlog with several (empty: the first)");
 }
 
 void TOutputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)

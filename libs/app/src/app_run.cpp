@@ -10,6 +10,7 @@
 #include <immslam/eval/statistics.h>
 #include <immslam/io/CImageSource.h>
 #include <immslam/io/CLiveCameraSource.h>
+#include <immslam/io/CRawlogSource.h>
 #include <immslam/io/CRawlogRecorder.h>
 #include <immslam/sim/CSyntheticSource.h>
 #include <immslam/system/CMonoSlamSystem.h>
@@ -35,6 +36,8 @@ namespace fs = std::filesystem;
 
 namespace
 {
+/** Skipped entries logged one by one (and kept in TRunSummary::skipReasons); the rest are counted. */
+constexpr std::size_t kLoggedSkips = 20;
 /** A path from the config: relative to the config's folder if it exists there, else as given. */
 std::string resolvePath(const std::string& p, const std::string& configDir)
 {
@@ -216,7 +219,11 @@ int CImmMonoSlamApp::runImpl()
     if (!m_args.record.empty()) throw std::runtime_error("--record needs --live");
     if (inputPath.empty() && inOpts.source != "synthetic") inputPath = resolvePath(inOpts.source, m_configDir);
     if (!inputPath.empty())
-      source = io::openImageSource(inputPath);
+    {
+      source = io::openImageSource(inputPath, inOpts.rawlog_sensor_label);
+      if (const auto* rawlog = dynamic_cast<const io::CRawlogSource*>(source.get()))
+        for (const auto& w : rawlog->warnings()) logStr(mrpt::system::LVL_WARN, inputPath + ": " + w);
+    }
     else if (inOpts.scenario.empty())
       source = std::make_unique<sim::CSyntheticSource>(sim::TScenario::builtinDefault());
     else
@@ -302,8 +309,15 @@ int CImmMonoSlamApp::runImpl()
     ++m_summary.framesRead;
     auto skip = [&](const std::string& reason) {
       ++m_summary.framesSkipped;
-      if (m_summary.skipReasons.size() < 20) m_summary.skipReasons.push_back(reason);
-      logStr(mrpt::system::LVL_WARN, "skipped: " + reason);
+      // The first 20 reasons are logged and kept; a rawlog of many sensors (IMU at 200 Hz, a second
+      // camera) would otherwise bury the log: the rest are counted (summary line).
+      if (m_summary.skipReasons.size() < kLoggedSkips)
+      {
+        m_summary.skipReasons.push_back(reason);
+        logStr(mrpt::system::LVL_WARN, "skipped: " + reason);
+        if (m_summary.skipReasons.size() == kLoggedSkips)
+          logStr(mrpt::system::LVL_WARN, "further skipped entries are counted, not logged");
+      }
     };
     if (st == io::ENextStatus::Skipped)
     {

@@ -9,7 +9,7 @@
 
 namespace immslam::io
 {
-CImageSource::Ptr openImageSource(const std::string& path)
+CImageSource::Ptr openImageSource(const std::string& path, const std::string& rawlogSensorLabel)
 {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -20,6 +20,6 @@ CImageSource::Ptr openImageSource(const std::string& path)
   if (isVideoFile(path)) return std::make_unique<CVideoFileSource>(path);
   // Any other existing file (normally *.rawlog) is read as a rawlog; CRawlogSource throws naming
   // the file if it is not one.
-  return std::make_unique<CRawlogSource>(path);
+  return std::make_unique<CRawlogSource>(path, rawlogSensorLabel);
 }
 }  // namespace immslam::io

@@ -5,6 +5,7 @@
 #include <immslam/math/text.h>
 
 #include "image_convert.h"
+#include "observation_image.h"
 
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
@@ -124,28 +125,9 @@ struct TIndexPattern
   }
 };
 
-/** An observation's image and calibration, whatever its class. */
-struct TImageView
-{
-  const mrpt::img::CImage* image = nullptr;
-  const mrpt::img::TCamera* camera = nullptr;
-};
-
-TImageView imageOf(const mrpt::obs::CObservation& o)
-{
-  using namespace mrpt::obs;
-  if (auto* im = dynamic_cast<const CObservationImage*>(&o)) return {&im->image, &im->cameraParams};
-  if (auto* st = dynamic_cast<const CObservationStereoImages*>(&o))
-    return {&st->imageLeft, &st->leftCamera};
-  if (auto* r3 = dynamic_cast<const CObservation3DRangeScan*>(&o))
-    if (r3->hasIntensityImage) return {&r3->intensityImage, &r3->cameraParamsIntensity};
-  return {};
-}
-
-bool isEmptyCamera(const mrpt::img::TCamera& c)
-{
-  return c.ncols == 0 || c.nrows == 0 || !(c.fx() > 0) || !(c.fy() > 0);
-}
+using detail::imageOf;
+using detail::isEmptyCamera;
+using detail::TImageView;
 
 std::string cameraText(const camera::CCameraModel::Ptr& c)
 {

@@ -3,6 +3,7 @@
 #include <immslam/io/CRawlogSource.h>
 
 #include "image_convert.h"
+#include "observation_image.h"
 #include "rawlog_stream.h"
 
 #include <mrpt/core/Clock.h>
@@ -83,12 +84,6 @@ eval::TStampedPose toStampedPose(const mrpt::obs::CObservationRobotPose& o)
   return p;
 }
 
-/** A TCamera that carries no calibration (default-constructed: zero focal length). */
-bool isEmptyCamera(const mrpt::img::TCamera& c)
-{
-  return c.ncols == 0 || c.nrows == 0 || !(c.fx() > 0) || !(c.fy() > 0);
-}
-
 std::string originOf(const TItem& it)
 {
   std::string s = "rawlog entry " + std::to_string(it.entry);
@@ -107,7 +102,11 @@ struct CRawlogSource::Impl
   // First-pass results.
   std::size_t firstPassEntries = 0;
   std::size_t items = 0;
-  std::size_t images = 0;                          ///< CObservationImage items
+  std::size_t images = 0;                          ///< items with a camera image (any sensor)
+  std::map<std::string, std::size_t> imageLabels;  ///< items with a camera image, by sensor label
+  std::vector<std::string> labelOrder;             ///< sensor labels of images, first seen first
+  std::string wantedLabel;                         ///< the constructor's choice (empty: the first)
+  std::string label;                               ///< the sensor whose images are the frames
   std::map<std::string, std::size_t> otherClasses;  ///< other items by class (ground truth excluded)
   bool sensoryFrames = false;
   std::string damage;  ///< empty: clean end
@@ -131,7 +130,7 @@ struct CRawlogSource::Impl
     if (lastTCam && *lastTCam == c) return lastCam;
     lastTCam = c;
     lastCam.reset();
-    if (!isEmptyCamera(c))
+    if (!detail::isEmptyCamera(c))
     {
       try
       {
@@ -190,18 +189,19 @@ struct CRawlogSource::Impl
           continue;
         }
         ++items;
-        const auto img = std::dynamic_pointer_cast<mrpt::obs::CObservationImage>(it.obs);
-        if (img)
-          ++images;
-        else
-          ++otherClasses[it.className];
-        if (calib || !img) continue;
+        const detail::TImageView v = it.obs ? detail::imageOf(*it.obs) : detail::TImageView{};
+        if (!v.image)
         {
-          camErr.clear();
-          calib = cameraOf(img->cameraParams, &camErr);
-          if (!camErr.empty())
-            warnings.push_back(originOf(it) + ": cameraParams not usable: " + camErr);
+          ++otherClasses[it.className];
+          continue;
         }
+        ++images;
+        if (imageLabels[it.obs->sensorLabel]++ == 0) labelOrder.push_back(it.obs->sensorLabel);
+        // The calibration of the first image of the sensor used (the first sensor unless one is asked for).
+        if (calib || it.obs->sensorLabel != (wantedLabel.empty() ? labelOrder.front() : wantedLabel)) continue;
+        camErr.clear();
+        calib = cameraOf(*v.camera, &camErr);
+        if (!camErr.empty()) warnings.push_back(originOf(it) + ": camera parameters not usable: " + camErr);
       }
     }
     firstPassEntries = r.entries();
@@ -213,6 +213,35 @@ struct CRawlogSource::Impl
     return "rawlog truncated/corrupt after entry " + std::to_string(entries) + " of " + path + ": " + why;
   }
 
+  /** The labels of the image sensors, "'A' (n images), 'B' (m images)". */
+  std::string labelList() const
+  {
+    std::string list;
+    for (const auto& l : labelOrder)
+      list += (list.empty() ? "'" : ", '") + l + "' (" + std::to_string(imageLabels.at(l)) + " images)";
+    return list;
+  }
+
+  /** Picks the sensor whose images are the frames: the asked one (an error naming the sensors held if
+   * the file has none of its images) or the first one seen (a warning if there are others). */
+  void chooseLabel()
+  {
+    if (!wantedLabel.empty())
+    {
+      if (!imageLabels.count(wantedLabel))
+        throw std::runtime_error("rawlog " + path + " holds no image of sensor '" + wantedLabel +
+                                 "' ([input] rawlog_sensor_label); its image sensors: " + labelList());
+      label = wantedLabel;
+    }
+    else
+      label = labelOrder.front();
+    if (labelOrder.size() > 1)
+      warnings.push_back("rawlog holds the images of " + std::to_string(labelOrder.size()) + " sensors, " + labelList() +
+                         ": using '" + label + "'" +
+                         (wantedLabel.empty() ? " (the first; choose with [input] rawlog_sensor_label)" : "") +
+                         ", the others' images are skipped");
+  }
+
   /** An input without a single image is an error (not an empty run): names the file and what it holds. */
   void requireImages() const
   {
@@ -222,7 +251,8 @@ struct CRawlogSource::Impl
       what = "is empty (no object)";
     else
     {
-      what = "holds no image observation (mrpt::obs::CObservationImage); it holds";
+      what = "holds no image observation (CObservationImage, CObservationStereoImages, or CObservation3DRangeScan "
+             "with an intensity image); it holds";
       std::string list;
       for (const auto& [cls, n] : otherClasses) list += (list.empty() ? " " : ", ") + std::to_string(n) + " " + cls;
       if (!gt.empty()) list += (list.empty() ? " " : ", ") + std::to_string(gt.size()) + " ground-truth poses";
@@ -233,10 +263,11 @@ struct CRawlogSource::Impl
   }
 };
 
-CRawlogSource::CRawlogSource(const std::string& path) : m_impl(std::make_unique<Impl>())
+CRawlogSource::CRawlogSource(const std::string& path, const std::string& sensorLabel) : m_impl(std::make_unique<Impl>())
 {
   Impl& m = *m_impl;
   m.path = path;
+  m.wantedLabel = sensorLabel;
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw std::runtime_error("rawlog file not found: " + path);
   m.gzInfo = detail::inspectGzip(path);
@@ -255,6 +286,7 @@ CRawlogSource::CRawlogSource(const std::string& path) : m_impl(std::make_unique<
   }
   m.firstPass();
   m.requireImages();
+  m.chooseLabel();
   // For MRPT code that loads the same observations' external images (process-wide setting).
   mrpt::img::CImage::setImagesPathBase(m.imagesDir);
   m.lastTCam.reset();
@@ -310,28 +342,34 @@ ENextStatus CRawlogSource::next(TFrame& frame, std::string& why)
 
     const std::size_t index = m.nextIndex++;
     const std::string origin = originOf(it);
-    auto img = std::dynamic_pointer_cast<mrpt::obs::CObservationImage>(it.obs);
-    if (!img)
+    const detail::TImageView v = it.obs ? detail::imageOf(*it.obs) : detail::TImageView{};
+    if (!v.image)
     {
       why = "observation of class " + it.className +
             (it.obs ? " (label '" + it.obs->sensorLabel + "')" : std::string()) + " skipped (" +
             origin + ")";
       return ENextStatus::Skipped;
     }
-    if (img->timestamp == INVALID_TIMESTAMP)
+    if (it.obs->sensorLabel != m.label)
     {
-      why = "CObservationImage without timestamp skipped (" + origin + ")";
+      why = "image of sensor '" + it.obs->sensorLabel + "' skipped, the frames come from sensor '" + m.label + "' (" +
+            origin + ")";
+      return ENextStatus::Skipped;
+    }
+    if (it.obs->timestamp == INVALID_TIMESTAMP)
+    {
+      why = it.className + " without timestamp skipped (" + origin + ")";
       return ENextStatus::Skipped;
     }
     TFrame f;
-    f.timestamp = mrpt::Clock::toDouble(img->timestamp);
+    f.timestamp = mrpt::Clock::toDouble(it.obs->timestamp);
     f.index = index;
     f.origin = origin;
     std::string sub;
     // External image <=> a file name. (Not isExternallyStored(): MRPT deserializes that flag from a
     // raw byte into a bool, and a corrupt byte such as 129 makes reading it undefined behaviour;
     // found by fuzzing, tests/fuzz/regressions/rawlog/image_external_flag_129.rawlog.)
-    if (const std::string name = img->image.getExternalStorageFile(); !name.empty())
+    if (const std::string name = v.image->getExternalStorageFile(); !name.empty())
     {
       std::string tried;
       const std::string file = m.resolveExternal(name, tried);
@@ -347,12 +385,12 @@ ENextStatus CRawlogSource::next(TFrame& frame, std::string& why)
         return ENextStatus::Skipped;
       }
     }
-    else if (!detail::setFrameImages(img->image.asCvMatRef(), f, sub))
+    else if (!detail::setFrameImages(v.image->asCvMatRef(), f, sub))
     {
       why = "embedded image: " + sub + " (" + origin + ")";
       return ENextStatus::Skipped;
     }
-    f.camera = m.cameraOf(img->cameraParams, nullptr);
+    f.camera = m.cameraOf(*v.camera, nullptr);
     frame = std::move(f);
     return ENextStatus::Frame;
   }

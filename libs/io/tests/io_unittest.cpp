@@ -2,6 +2,7 @@
  * dataset2rawlog round trips on the shared data sets, CDatasetWriter, CCsvWriter. */
 #include <gtest/gtest.h>
 #include <immslam/camera/CCameraModel.h>
+#include <immslam/camera/mrpt_camera.h>
 #include <immslam/io/CCsvWriter.h>
 #include <immslam/io/CDatasetFolderSource.h>
 #include <immslam/io/CDatasetWriter.h>
@@ -13,10 +14,12 @@
 #include <mrpt/img/CImage.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/io/CMemoryStream.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
 #include <mrpt/obs/CObservationComment.h>
 #include <mrpt/obs/CObservationImage.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CObservationRobotPose.h>
+#include <mrpt/obs/CObservationStereoImages.h>
 #include <mrpt/serialization/CArchive.h>
 
 #include <opencv2/core.hpp>
@@ -554,6 +557,143 @@ TEST(Rawlog, MixedObservationsSkippedAndCounted)
   }
   EXPECT_EQ(s.frames[1].index, 3u);  // after image, odometry, non-GT pose
   EXPECT_EQ(s.endWhy, "");
+}
+
+TEST(Rawlog, StereoAndRangeCameraImagesAreFramesOfTheirCamera)
+{
+  // What MRPT's grabbers log for a stereo rig (CObservationStereoImages: the left image and camera are
+  // the frames) and an RGB-D camera (CObservation3DRangeScan: the intensity image and its camera);
+  // a range scan without an intensity image carries nothing for a monocular system.
+  TempDir d;
+  const std::string rawlog = d / "stereo_rgbd.rawlog";
+  const auto leftCam = camera::toTCamera(*pinhole(32, 24));
+  const auto rightCam = camera::toTCamera(*camera::makeCameraModel("pinhole", 32, 24, {150.0, 150.0, 16.0, 12.0}));
+  const auto irCam = camera::toTCamera(*camera::makeCameraModel("pinhole", 40, 30, {60.0, 60.0, 20.0, 15.0}));
+  ASSERT_TRUE(leftCam && rightCam && irCam);
+  std::vector<cv::Mat> left, ir;
+  {
+    mrpt::io::CFileGZOutputStream f(rawlog);
+    auto a = mrpt::serialization::archiveFrom(f);
+    for (int i = 0; i < 4; ++i)
+    {
+      auto st = mrpt::obs::CObservationStereoImages::Create();
+      st->sensorLabel = "BUMBLEBEE";
+      st->timestamp = mrpt::Clock::fromDouble(1.0 + i);
+      left.push_back(syntheticImage(32, 24, CV_8UC1, i));
+      st->imageLeft = mrpt::img::CImage(left.back(), mrpt::img::DEEP_COPY);
+      st->imageRight = mrpt::img::CImage(syntheticImage(32, 24, CV_8UC1, 100 + i), mrpt::img::DEEP_COPY);
+      st->hasImageRight = true;
+      st->leftCamera = *leftCam;
+      st->rightCamera = *rightCam;
+      a << *st;
+    }
+  }
+  CRawlogSource src(rawlog);
+  ASSERT_TRUE(src.calibration());
+  EXPECT_DOUBLE_EQ(src.calibration()->fx(), 100.0);  // the left camera's
+  const TStream s = drain(src);
+  ASSERT_EQ(s.frames.size(), 4u);
+  EXPECT_TRUE(s.skipped.empty());
+  for (int i = 0; i < 4; ++i)
+  {
+    EXPECT_TRUE(sameImage(s.frames[i].grey, left[i])) << i;
+    EXPECT_NEAR(s.frames[i].timestamp, 1.0 + i, 1e-6);
+    ASSERT_TRUE(s.frames[i].camera);
+    EXPECT_DOUBLE_EQ(s.frames[i].camera->fx(), 100.0);
+  }
+
+  const std::string rgbd = d / "rgbd.rawlog";
+  {
+    mrpt::io::CFileGZOutputStream f(rgbd);
+    auto a = mrpt::serialization::archiveFrom(f);
+    for (int i = 0; i < 4; ++i)
+    {
+      auto r3 = mrpt::obs::CObservation3DRangeScan::Create();
+      r3->sensorLabel = "KINECT";
+      r3->timestamp = mrpt::Clock::fromDouble(5.0 + i);
+      r3->hasIntensityImage = i != 2;  // entry 2: depth only
+      if (r3->hasIntensityImage)
+      {
+        ir.push_back(syntheticImage(40, 30, CV_8UC1, 200 + i));
+        r3->intensityImage = mrpt::img::CImage(ir.back(), mrpt::img::DEEP_COPY);
+      }
+      r3->cameraParamsIntensity = *irCam;
+      a << *r3;
+    }
+  }
+  CRawlogSource src3(rgbd);
+  ASSERT_TRUE(src3.calibration());
+  EXPECT_DOUBLE_EQ(src3.calibration()->fx(), 60.0);
+  const TStream s3 = drain(src3);
+  ASSERT_EQ(s3.frames.size(), 3u);
+  ASSERT_EQ(s3.skipped.size(), 1u);
+  EXPECT_NE(s3.skipped[0].find("CObservation3DRangeScan"), std::string::npos) << s3.skipped[0];
+  for (std::size_t i = 0; i < ir.size(); ++i) EXPECT_TRUE(sameImage(s3.frames[i].grey, ir[i])) << i;
+}
+
+TEST(Rawlog, SeveralCamerasTheFirstOrTheOneChosenBySensorLabel)
+{
+  // Two cameras logged as CObservationImage with their own labels (a stereo rig recorded as two
+  // monocular sensors): interleaving them would feed the filter two viewpoints. The frames are the
+  // first camera's, or the one asked for; the others' images are skipped naming their sensor.
+  TempDir d;
+  const std::string rawlog = d / "two_cameras.rawlog";
+  const auto camL = camera::toTCamera(*pinhole(32, 24));
+  const auto camR = camera::toTCamera(*camera::makeCameraModel("pinhole", 32, 24, {150.0, 150.0, 16.0, 12.0}));
+  ASSERT_TRUE(camL && camR);
+  std::vector<cv::Mat> imL, imR;
+  {
+    mrpt::io::CFileGZOutputStream f(rawlog);
+    auto a = mrpt::serialization::archiveFrom(f);
+    for (int i = 0; i < 3; ++i)
+      for (const bool isLeft : {true, false})
+      {
+        auto img = mrpt::obs::CObservationImage::Create();
+        img->sensorLabel = isLeft ? "LEFT" : "RIGHT";
+        img->timestamp = mrpt::Clock::fromDouble(2.0 + i + (isLeft ? 0.0 : 0.001));
+        (isLeft ? imL : imR).push_back(syntheticImage(32, 24, CV_8UC1, (isLeft ? 0 : 50) + i));
+        img->image = mrpt::img::CImage((isLeft ? imL : imR).back(), mrpt::img::DEEP_COPY);
+        img->cameraParams = isLeft ? *camL : *camR;
+        a << *img;
+      }
+  }
+  const auto joined = [](const std::vector<std::string>& v) {
+    std::string all;
+    for (const auto& w : v) all += w + "\n";
+    return all;
+  };
+  {
+    CRawlogSource src(rawlog);
+    EXPECT_NE(joined(src.warnings()).find("'LEFT' (3 images), 'RIGHT' (3 images): using 'LEFT'"), std::string::npos)
+        << joined(src.warnings());
+    ASSERT_TRUE(src.calibration());
+    EXPECT_DOUBLE_EQ(src.calibration()->fx(), 100.0);
+    const TStream s = drain(src);
+    ASSERT_EQ(s.frames.size(), 3u);
+    ASSERT_EQ(s.skipped.size(), 3u);
+    EXPECT_NE(s.skipped[0].find("image of sensor 'RIGHT' skipped"), std::string::npos) << s.skipped[0];
+    for (int i = 0; i < 3; ++i) EXPECT_TRUE(sameImage(s.frames[i].grey, imL[i])) << i;
+  }
+  {
+    const auto src = openImageSource(rawlog, "RIGHT");
+    ASSERT_TRUE(src->calibration());
+    EXPECT_DOUBLE_EQ(src->calibration()->fx(), 150.0);
+    const TStream s = drain(*src);
+    ASSERT_EQ(s.frames.size(), 3u);
+    for (int i = 0; i < 3; ++i) EXPECT_TRUE(sameImage(s.frames[i].grey, imR[i])) << i;
+  }
+  try
+  {
+    CRawlogSource src(rawlog, "FRONT");
+    ADD_FAILURE() << "no error";
+  }
+  catch (const std::runtime_error& e)
+  {
+    const std::string m = e.what();
+    EXPECT_NE(m.find(rawlog), std::string::npos) << m;
+    EXPECT_NE(m.find("no image of sensor 'FRONT'"), std::string::npos) << m;
+    EXPECT_NE(m.find("'LEFT' (3 images), 'RIGHT' (3 images)"), std::string::npos) << m;
+  }
 }
 
 TEST(Rawlog, TruncatedEndsCleanly)

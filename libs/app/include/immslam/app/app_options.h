@@ -17,6 +17,9 @@ struct TInputOptions : public mrpt::config::CLoadableOptions
   std::string scenario;
   /** Frame rate assumed for live sources without timestamps (image_dir, ffmpeg). */
   double live_frame_rate_hz = 30;
+  /** The camera of a rawlog holding the images of several sensors (their `sensorLabel`); empty: the
+   * first one in the file (io::CRawlogSource). */
+  std::string rawlog_sensor_label;
 
   void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
   void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;

@@ -73,6 +73,7 @@ class CImageSource
 
 /** Opens a dataset folder (../shared/data/README.md format), a video file (CVideoFileSource, by its
  * extension: isVideoFile()) or a .rawlog file (either MRPT layout; any other file), chosen by what
- * `path` is. \throws std::runtime_error naming the path if it is none of them or unreadable. */
-CImageSource::Ptr openImageSource(const std::string& path);
+ * `path` is; `rawlogSensorLabel` picks a rawlog's camera (CRawlogSource; empty: its first).
+ * \throws std::runtime_error naming the path if it is none of them or unreadable. */
+CImageSource::Ptr openImageSource(const std::string& path, const std::string& rawlogSensorLabel = "");
 }  // namespace immslam::io

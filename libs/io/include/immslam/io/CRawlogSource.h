@@ -14,10 +14,17 @@ namespace immslam::io
  * the observations of each sensory frame are visited in order, actions are ignored).
  *
  * What becomes what:
- * - every `mrpt::obs::CObservationImage` is one frame: timestamp = `mrpt::Clock::toDouble`, image
- *   (embedded or external) converted as in CDatasetFolderSource (grey + kept colour, 16 -> 8 bits),
- *   TFrame::camera from `cameraParams` (camera::fromTCamera) unless that TCamera is empty
- *   (zero focal length or size: e.g. a davison camera that TCamera cannot represent);
+ * - every observation carrying a camera image of the chosen sensor is one frame: a
+ *   `mrpt::obs::CObservationImage` (`image`, `cameraParams`), a `CObservationStereoImages` (the left
+ *   image and `leftCamera`) or a `CObservation3DRangeScan` with an intensity image (`intensityImage`,
+ *   `cameraParamsIntensity`). Timestamp = `mrpt::Clock::toDouble`, image (embedded or external)
+ *   converted as in CDatasetFolderSource (grey + kept colour, 16 -> 8 bits), TFrame::camera from the
+ *   TCamera (camera::fromTCamera) unless that TCamera is empty (zero focal length or size: e.g. a
+ *   davison camera that TCamera cannot represent);
+ * - the chosen sensor is the `sensorLabel` given to the constructor or else the first one whose
+ *   image the file holds; the images of other sensors (a second camera, the other half of a stereo
+ *   rig logged as two CObservationImage) give ENextStatus::Skipped naming their sensor, and
+ *   warnings() says which sensors the file holds;
  * - `CObservationRobotPose` with sensor label `GT` is ground truth T_W_C (optical frame, x right,
  *   y down, z forward: the pose mean, quaternion from `CPose3D::getAsQuaternion`); it is consumed
  *   silently (groundTruth() has all of them);
@@ -44,11 +51,13 @@ namespace immslam::io
 class CRawlogSource : public CImageSource
 {
  public:
-  /** Opens `path` and makes the first pass.
+  /** Opens `path` and makes the first pass. `sensorLabel`: the sensor whose images are the frames
+   * (empty: the first one in the file).
    * \throws std::runtime_error naming the path if the file cannot be opened, its very first
-   * object cannot be read (not a rawlog), or it holds no CObservationImage at all (an empty file,
-   * or only other observations / ground truth: the message lists what it holds). */
-  explicit CRawlogSource(const std::string& path);
+   * object cannot be read (not a rawlog), it holds no camera image at all (an empty file, or only
+   * other observations / ground truth: the message lists what it holds), or none of `sensorLabel`
+   * (the message lists the image sensors it holds). */
+  explicit CRawlogSource(const std::string& path, const std::string& sensorLabel = "");
   ~CRawlogSource() override;
   CRawlogSource(const CRawlogSource&) = delete;
   CRawlogSource& operator=(const CRawlogSource&) = delete;
