@@ -42,6 +42,11 @@ ENextStatus CVideoFileSource::next(TFrame& frame, std::string& why)
   if (!m_cap->read(img) || img.empty())
   {
     why.clear();
+    // The header's frame count is exact for most containers and an estimate (duration x rate) for a
+    // few: an end well before it is a cut or damaged file, said in the summary (not an error).
+    if (m_count > 0 && m_index + std::max<std::size_t>(2, m_count / 50) < m_count)
+      why = "video file " + m_path + " ended after " + std::to_string(m_index) + " of the " + std::to_string(m_count) +
+            " frames its header announces (cut or damaged?)";
     return ENextStatus::End;
   }
   frame = TFrame();
