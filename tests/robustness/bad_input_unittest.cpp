@@ -563,6 +563,41 @@ TEST(RobustImageSize, UniformRescaleIsAcceptedAtTheFirstFrameOnly)
   readAndCheckOutputs(d + "/out");
 }
 
+TEST(RobustImageSize, WideImagesAreProcessedAtAPowerOfTwoReduction)
+{
+  // 1280x960 images ([input] max_image_width = 1024 by default) are processed at 640x480 with the
+  // calibration halved: the same estimate, bit for bit, as the same frames reduced beforehand with a
+  // 640x480 calibration. (Each 320x240 pixel is a 4x4 block, so the 2x area reduction is exact.)
+  const std::string wide = copyBase("wide_1280"), half = copyBase("wide_640");
+  const auto lines = readRgb(wide);
+  for (const auto& l : lines)
+  {
+    const cv::Mat g = cv::imread(wide + "/" + l.path, cv::IMREAD_UNCHANGED);
+    cv::Mat w, h;
+    cv::resize(g, w, {1280, 960}, 0, 0, cv::INTER_NEAREST);
+    cv::resize(w, h, {640, 480}, 0, 0, cv::INTER_AREA);
+    cv::imwrite(wide + "/" + l.path, w);
+    cv::imwrite(half + "/" + l.path, h);
+  }
+  const auto base = camera::loadCalibFile(baseDataset() + "/calib.txt");
+  camera::saveCalibFile(*base->scaled(4.0), wide + "/calib.txt");
+  camera::saveCalibFile(*base->scaled(2.0), half + "/calib.txt");
+  const auto a = runApp({kSingle, wide, "--out", wide + "/out"});
+  const auto b = runApp({kSingle, half, "--out", half + "/out"});
+  ASSERT_EQ(a.status, 0) << a.err;
+  ASSERT_EQ(b.status, 0) << b.err;
+  EXPECT_EQ(a.summary.framesProcessed, 40u);
+  EXPECT_EQ(a.summary.framesSkipped, 0u);
+  EXPECT_EQ(test::readFile(wide + "/out/trajectory.txt"), test::readFile(half + "/out/trajectory.txt"));
+  EXPECT_EQ(test::readFile(wide + "/out/map.csv"), test::readFile(half + "/out/map.csv"));
+  readAndCheckOutputs(wide + "/out");
+  // max_image_width = 0: the full 1280x960 images (a different run).
+  const auto c = runApp({kSingle, wide, "--out", wide + "/out_full", "--set", "input.max_image_width=0"});
+  ASSERT_EQ(c.status, 0) << c.err;
+  EXPECT_EQ(c.summary.framesProcessed, 40u);
+  EXPECT_NE(test::readFile(wide + "/out_full/trajectory.txt"), test::readFile(wide + "/out/trajectory.txt"));
+}
+
 TEST(RobustImageSize, NonUniformMismatchFromTheStartSkipsEveryFrame)
 {
   const std::string d = copyBase("size_nonuniform");

@@ -16,6 +16,7 @@
 #include <immslam/system/CMonoSlamSystem.h>
 
 #include <mrpt/config/CConfigFile.h>
+#include <opencv2/imgproc.hpp>
 #include <unistd.h>
 
 #include <algorithm>
@@ -292,6 +293,7 @@ int CImmMonoSlamApp::runImpl()
   io::TFrame frame;
   std::string why;
   double lastTimestamp = -std::numeric_limits<double>::infinity();
+  int downscale = 0;  // image reduction, decided at the first frame (0: not yet)
   for (;;)
   {
     if (m_stop)
@@ -333,6 +335,41 @@ int CImmMonoSlamApp::runImpl()
         << " is not after the previous frame's " << lastTimestamp;
       skip(s.str());
       continue;
+    }
+    if (m_summary.framesProcessed == 0 && downscale == 0)
+    {
+      // At the first frame: the power-of-two reduction that brings the width to max_image_width (one
+      // that divides both sides, so the scaled calibration is exact), and the calibration with it.
+      downscale = 1;
+      while (inOpts.max_image_width > 0 && frame.grey.cols / downscale > inOpts.max_image_width &&
+             frame.grey.cols % (2 * downscale) == 0 && frame.grey.rows % (2 * downscale) == 0)
+        downscale *= 2;
+      if (inOpts.max_image_width > 0 && frame.grey.cols / downscale > inOpts.max_image_width)
+        logStr(mrpt::system::LVL_WARN, "images are " + std::to_string(frame.grey.cols) + "x" +
+                                           std::to_string(frame.grey.rows) + ", wider than [input] max_image_width = " +
+                                           std::to_string(inOpts.max_image_width) +
+                                           ", and cannot be halved exactly: processed at full size");
+      if (downscale > 1)
+      {
+        logStr(mrpt::system::LVL_INFO, "images are " + std::to_string(frame.grey.cols) + "x" +
+                                           std::to_string(frame.grey.rows) + ": processed at " +
+                                           std::to_string(frame.grey.cols / downscale) + "x" +
+                                           std::to_string(frame.grey.rows / downscale) +
+                                           " ([input] max_image_width = " + std::to_string(inOpts.max_image_width) +
+                                           ")");
+        if (cam && cam->width() == frame.grey.cols && cam->height() == frame.grey.rows)
+        {
+          cam = cam->scaled(1.0 / downscale);
+          sys = std::make_unique<system::CMonoSlamSystem>(m_cfg, cam);
+          logStr(mrpt::system::LVL_INFO, "camera (" + calibOrigin + ", scaled): " + cam->toCalibLine());
+        }
+      }
+    }
+    if (downscale > 1)
+    {
+      const cv::Size small(frame.grey.cols / downscale, frame.grey.rows / downscale);
+      cv::resize(frame.grey, frame.grey, small, 0, 0, cv::INTER_AREA);
+      if (!frame.colour.empty()) cv::resize(frame.colour, frame.colour, small, 0, 0, cv::INTER_AREA);
     }
     if (guessCalibration)
     {

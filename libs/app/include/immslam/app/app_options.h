@@ -20,6 +20,10 @@ struct TInputOptions : public mrpt::config::CLoadableOptions
   /** The camera of a rawlog holding the images of several sensors (their `sensorLabel`); empty: the
    * first one in the file (io::CRawlogSource). */
   std::string rawlog_sensor_label;
+  /** Images wider than this are processed at half, quarter, ... size (the smallest power-of-two
+   * reduction that fits, area-averaged; the calibration scaled with them): the EKF's 11x11 patches,
+   * search regions and motion noise in pixels are made for 320-1024 px images. 0: never. */
+  int max_image_width = 1024;
 
   void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
   void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
