@@ -294,6 +294,7 @@ int CImmMonoSlamApp::runImpl()
   std::string why;
   double lastTimestamp = -std::numeric_limits<double>::infinity();
   int downscale = 0;  // image reduction, decided at the first frame (0: not yet)
+  cv::Size fullSize;  // the first frame's size: frames of another size are not reduced (and then skipped)
   for (;;)
   {
     if (m_stop)
@@ -338,38 +339,36 @@ int CImmMonoSlamApp::runImpl()
     }
     if (m_summary.framesProcessed == 0 && downscale == 0)
     {
-      // At the first frame: the power-of-two reduction that brings the width to max_image_width (one
-      // that divides both sides, so the scaled calibration is exact), and the calibration with it.
+      // At the first frame: the power-of-two reduction that brings the width to max_image_width, and
+      // the calibration with it. A side not divisible by it loses its last (at most downscale - 1)
+      // columns or rows first, which leaves the intrinsics as they are, so the scaling is exact.
       downscale = 1;
-      while (inOpts.max_image_width > 0 && frame.grey.cols / downscale > inOpts.max_image_width &&
-             frame.grey.cols % (2 * downscale) == 0 && frame.grey.rows % (2 * downscale) == 0)
-        downscale *= 2;
-      if (inOpts.max_image_width > 0 && frame.grey.cols / downscale > inOpts.max_image_width)
-        logStr(mrpt::system::LVL_WARN, "images are " + std::to_string(frame.grey.cols) + "x" +
-                                           std::to_string(frame.grey.rows) + ", wider than [input] max_image_width = " +
-                                           std::to_string(inOpts.max_image_width) +
-                                           ", and cannot be halved exactly: processed at full size");
+      while (inOpts.max_image_width > 0 && frame.grey.cols / downscale > inOpts.max_image_width) downscale *= 2;
+      fullSize = frame.grey.size();
       if (downscale > 1)
       {
-        logStr(mrpt::system::LVL_INFO, "images are " + std::to_string(frame.grey.cols) + "x" +
-                                           std::to_string(frame.grey.rows) + ": processed at " +
-                                           std::to_string(frame.grey.cols / downscale) + "x" +
-                                           std::to_string(frame.grey.rows / downscale) +
-                                           " ([input] max_image_width = " + std::to_string(inOpts.max_image_width) +
-                                           ")");
-        if (cam && cam->width() == frame.grey.cols && cam->height() == frame.grey.rows)
+        const cv::Size cropped(fullSize.width - fullSize.width % downscale, fullSize.height - fullSize.height % downscale);
+        std::ostringstream msg;
+        msg << "images are " << fullSize.width << "x" << fullSize.height << ": processed at "
+            << cropped.width / downscale << "x" << cropped.height / downscale << " ([input] max_image_width = "
+            << inOpts.max_image_width << ")";
+        if (cropped != fullSize) msg << ", after dropping their last columns/rows to " << cropped.width << "x" << cropped.height;
+        logStr(mrpt::system::LVL_INFO, msg.str());
+        if (cam && cam->width() == fullSize.width && cam->height() == fullSize.height)
         {
-          cam = cam->scaled(1.0 / downscale);
+          cam = camera::makeCameraModel(cam->modelName(), cropped.width, cropped.height, cam->parameters())
+                    ->scaled(1.0 / downscale);
           sys = std::make_unique<system::CMonoSlamSystem>(m_cfg, cam);
           logStr(mrpt::system::LVL_INFO, "camera (" + calibOrigin + ", scaled): " + cam->toCalibLine());
         }
       }
     }
-    if (downscale > 1)
+    if (downscale > 1 && frame.grey.size() == fullSize)
     {
-      const cv::Size small(frame.grey.cols / downscale, frame.grey.rows / downscale);
-      cv::resize(frame.grey, frame.grey, small, 0, 0, cv::INTER_AREA);
-      if (!frame.colour.empty()) cv::resize(frame.colour, frame.colour, small, 0, 0, cv::INTER_AREA);
+      const cv::Rect roi(0, 0, fullSize.width - fullSize.width % downscale, fullSize.height - fullSize.height % downscale);
+      const cv::Size small(roi.width / downscale, roi.height / downscale);
+      cv::resize(frame.grey(roi), frame.grey, small, 0, 0, cv::INTER_AREA);
+      if (!frame.colour.empty()) cv::resize(frame.colour(roi), frame.colour, small, 0, 0, cv::INTER_AREA);
     }
     if (guessCalibration)
     {

@@ -21,7 +21,8 @@ struct TInputOptions : public mrpt::config::CLoadableOptions
    * first one in the file (io::CRawlogSource). */
   std::string rawlog_sensor_label;
   /** Images wider than this are processed at half, quarter, ... size (the smallest power-of-two
-   * reduction that fits, area-averaged; the calibration scaled with them): the EKF's 11x11 patches,
+   * reduction that fits, area-averaged, after dropping the last columns/rows it does not divide; the
+   * calibration scaled with them): the EKF's 11x11 patches,
    * search regions and motion noise in pixels are made for 320-1024 px images. 0: never. */
   int max_image_width = 1024;
 
