@@ -565,7 +565,7 @@ TEST(RobustImageSize, UniformRescaleIsAcceptedAtTheFirstFrameOnly)
 
 TEST(RobustImageSize, WideImagesAreProcessedAtAPowerOfTwoReduction)
 {
-  // 1280x960 images ([input] max_image_width = 1024 by default) are processed at 640x480 with the
+  // 1280x960 images with [input] max_image_width = 1024 are processed at 640x480 with the
   // calibration halved: the same estimate, bit for bit, as the same frames reduced beforehand with a
   // 640x480 calibration. (Each 320x240 pixel is a 4x4 block, so the 2x area reduction is exact.)
   const std::string wide = copyBase("wide_1280"), half = copyBase("wide_640");
@@ -582,7 +582,12 @@ TEST(RobustImageSize, WideImagesAreProcessedAtAPowerOfTwoReduction)
   const auto base = camera::loadCalibFile(baseDataset() + "/calib.txt");
   camera::saveCalibFile(*base->scaled(4.0), wide + "/calib.txt");
   camera::saveCalibFile(*base->scaled(2.0), half + "/calib.txt");
-  const auto a = runApp({kSingle, wide, "--out", wide + "/out"});
+  const std::vector<std::string> reduce{"--set", "input.max_image_width=1024"};
+  const auto with = [&](std::vector<std::string> args) {
+    args.insert(args.end(), reduce.begin(), reduce.end());
+    return args;
+  };
+  const auto a = runApp(with({kSingle, wide, "--out", wide + "/out"}));
   const auto b = runApp({kSingle, half, "--out", half + "/out"});
   ASSERT_EQ(a.status, 0) << a.err;
   ASSERT_EQ(b.status, 0) << b.err;
@@ -608,11 +613,11 @@ TEST(RobustImageSize, WideImagesAreProcessedAtAPowerOfTwoReduction)
     rng.fill(bottom, cv::RNG::UNIFORM, 0, 255);
     cv::imwrite(odd + "/" + l.path, o);
   }
-  const auto e = runApp({kSingle, odd, "--out", odd + "/out"});
+  const auto e = runApp(with({kSingle, odd, "--out", odd + "/out"}));
   ASSERT_EQ(e.status, 0) << e.err;
   EXPECT_EQ(test::readFile(odd + "/out/trajectory.txt"), test::readFile(half + "/out/trajectory.txt"));
-  // max_image_width = 0: the full 1280x960 images (a different run).
-  const auto c = runApp({kSingle, wide, "--out", wide + "/out_full", "--set", "input.max_image_width=0"});
+  // The default, max_image_width = 0: the full 1280x960 images (a different run).
+  const auto c = runApp({kSingle, wide, "--out", wide + "/out_full"});
   ASSERT_EQ(c.status, 0) << c.err;
   EXPECT_EQ(c.summary.framesProcessed, 40u);
   EXPECT_NE(test::readFile(wide + "/out_full/trajectory.txt"), test::readFile(wide + "/out/trajectory.txt"));

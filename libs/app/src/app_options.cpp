@@ -22,7 +22,7 @@ void TInputOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std
   MRPT_SAVE_CONFIG_VAR_COMMENT(scenario, "scenario of the synthetic source (empty: built-in default)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(live_frame_rate_hz, "frame rate of live sources without timestamps");
   MRPT_SAVE_CONFIG_VAR_COMMENT(rawlog_sensor_label, "camera (sensorLabel) of a rawlog with several (empty: the first)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(max_image_width, "wider images are processed at 1/2, 1/4, ... size (0: never)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(max_image_width, "wider images are processed at 1/2, 1/4, ... size (0: never, the default)");
 }
 
 void TOutputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)

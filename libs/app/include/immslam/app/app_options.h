@@ -22,9 +22,9 @@ struct TInputOptions : public mrpt::config::CLoadableOptions
   std::string rawlog_sensor_label;
   /** Images wider than this are processed at half, quarter, ... size (the smallest power-of-two
    * reduction that fits, area-averaged, after dropping the last columns/rows it does not divide; the
-   * calibration scaled with them): the EKF's 11x11 patches,
-   * search regions and motion noise in pixels are made for 320-1024 px images. 0: never. */
-  int max_image_width = 1024;
+   * calibration scaled with them). 0 (default): every size as it is; sharp 1280x960 images track
+   * better at full size (doc/usage.md), soft or blown-up HD video may find corners only reduced. */
+  int max_image_width = 0;
 
   void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
   void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
