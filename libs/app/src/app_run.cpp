@@ -39,6 +39,45 @@ namespace
 {
 /** Skipped entries logged one by one (and kept in TRunSummary::skipReasons); the rest are counted. */
 constexpr std::size_t kLoggedSkips = 20;
+/** [input] max_image_width: the power-of-two reduction that brings the first frame's width to the
+ * limit. A side the factor does not divide loses its last (at most factor - 1) columns or rows first,
+ * which leaves the intrinsics as they are, so the scaled calibration is exact. Frames of another size
+ * than the first are left alone (the size check skips them). */
+struct TImageReduction
+{
+  int factor = 0;  ///< 0: not decided yet; 1: none
+  cv::Size full;   ///< the first frame's size
+  cv::Rect kept;   ///< the part of a full-size frame that is reduced
+
+  TImageReduction() = default;
+  TImageReduction(cv::Size first, int maxWidth) : factor(1), full(first)
+  {
+    while (maxWidth > 0 && full.width / factor > maxWidth) factor *= 2;
+    kept = cv::Rect(0, 0, full.width - full.width % factor, full.height - full.height % factor);
+  }
+  bool decided() const { return factor > 0; }
+  std::string describe(int maxWidth) const
+  {
+    std::ostringstream s;
+    s << "images are " << full.width << "x" << full.height << ": processed at " << kept.width / factor << "x"
+      << kept.height / factor << " ([input] max_image_width = " << maxWidth << ")";
+    if (kept.size() != full) s << ", after dropping their last columns/rows to " << kept.width << "x" << kept.height;
+    return s.str();
+  }
+  /** The calibration of a full-size frame for the reduced one. */
+  camera::CCameraModel::Ptr camera(const camera::CCameraModel& c) const
+  {
+    return camera::makeCameraModel(c.modelName(), kept.width, kept.height, c.parameters())->scaled(1.0 / factor);
+  }
+  void apply(io::TFrame& f) const
+  {
+    if (factor <= 1 || f.grey.size() != full) return;
+    const cv::Size small(kept.width / factor, kept.height / factor);
+    cv::resize(f.grey(kept), f.grey, small, 0, 0, cv::INTER_AREA);
+    if (!f.colour.empty()) cv::resize(f.colour(kept), f.colour, small, 0, 0, cv::INTER_AREA);
+  }
+};
+
 /** A path from the config: relative to the config's folder if it exists there, else as given. */
 std::string resolvePath(const std::string& p, const std::string& configDir)
 {
@@ -293,8 +332,7 @@ int CImmMonoSlamApp::runImpl()
   io::TFrame frame;
   std::string why;
   double lastTimestamp = -std::numeric_limits<double>::infinity();
-  int downscale = 0;  // image reduction, decided at the first frame (0: not yet)
-  cv::Size fullSize;  // the first frame's size: frames of another size are not reduced (and then skipped)
+  TImageReduction reduction;  // [input] max_image_width, decided at the first frame
   for (;;)
   {
     if (m_stop)
@@ -337,39 +375,21 @@ int CImmMonoSlamApp::runImpl()
       skip(s.str());
       continue;
     }
-    if (m_summary.framesProcessed == 0 && downscale == 0)
+    if (m_summary.framesProcessed == 0 && !reduction.decided())
     {
-      // At the first frame: the power-of-two reduction that brings the width to max_image_width, and
-      // the calibration with it. A side not divisible by it loses its last (at most downscale - 1)
-      // columns or rows first, which leaves the intrinsics as they are, so the scaling is exact.
-      downscale = 1;
-      while (inOpts.max_image_width > 0 && frame.grey.cols / downscale > inOpts.max_image_width) downscale *= 2;
-      fullSize = frame.grey.size();
-      if (downscale > 1)
+      reduction = TImageReduction(frame.grey.size(), inOpts.max_image_width);
+      if (reduction.factor > 1)
       {
-        const cv::Size cropped(fullSize.width - fullSize.width % downscale, fullSize.height - fullSize.height % downscale);
-        std::ostringstream msg;
-        msg << "images are " << fullSize.width << "x" << fullSize.height << ": processed at "
-            << cropped.width / downscale << "x" << cropped.height / downscale << " ([input] max_image_width = "
-            << inOpts.max_image_width << ")";
-        if (cropped != fullSize) msg << ", after dropping their last columns/rows to " << cropped.width << "x" << cropped.height;
-        logStr(mrpt::system::LVL_INFO, msg.str());
-        if (cam && cam->width() == fullSize.width && cam->height() == fullSize.height)
+        logStr(mrpt::system::LVL_INFO, reduction.describe(inOpts.max_image_width));
+        if (cam && cam->width() == reduction.full.width && cam->height() == reduction.full.height)
         {
-          cam = camera::makeCameraModel(cam->modelName(), cropped.width, cropped.height, cam->parameters())
-                    ->scaled(1.0 / downscale);
+          cam = reduction.camera(*cam);
           sys = std::make_unique<system::CMonoSlamSystem>(m_cfg, cam);
           logStr(mrpt::system::LVL_INFO, "camera (" + calibOrigin + ", scaled): " + cam->toCalibLine());
         }
       }
     }
-    if (downscale > 1 && frame.grey.size() == fullSize)
-    {
-      const cv::Rect roi(0, 0, fullSize.width - fullSize.width % downscale, fullSize.height - fullSize.height % downscale);
-      const cv::Size small(roi.width / downscale, roi.height / downscale);
-      cv::resize(frame.grey(roi), frame.grey, small, 0, 0, cv::INTER_AREA);
-      if (!frame.colour.empty()) cv::resize(frame.colour(roi), frame.colour, small, 0, 0, cv::INTER_AREA);
-    }
+    reduction.apply(frame);
     if (guessCalibration)
     {
       // The guessed pinhole at this frame's size, kept for a re-run with --calib.
