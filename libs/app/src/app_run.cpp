@@ -158,6 +158,7 @@ void refineTrajectory(const std::vector<eval::TSearchRow>& rows, const COutputFi
       << prob.points.size() << " features, " << prob.obs.size() << " matches; reprojection RMS " << before << " -> "
       << after << " px in " << r.iterations << " iterations, " << std::setprecision(2) << summary.refineSeconds
       << " s";
+    if (r.components > 1) m << "; " << r.components << " unrelated blocks (the run started new maps), each in its own frame";
     log.logStr(mrpt::system::LVL_INFO, m.str());
     if (gt && prob.poses.size() >= 3) summary.ateRefined = eval::computeAte(prob.poses, *gt, eval::EAlignment::Sim3, 0.01);
   }

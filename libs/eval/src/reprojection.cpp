@@ -9,6 +9,7 @@
 #include <Eigen/SVD>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <numeric>
 #include <cmath>
 #include <map>
 #include <sstream>
@@ -313,6 +314,35 @@ TReprojectionStats triangulateAll(TBundleProblem& p, double thresholdPx)
   return reprojectionStats(p, thresholdPx);
 }
 
+std::vector<std::size_t> firstPoseOfEachComponent(const TBundleProblem& p, const std::vector<char>& used)
+{
+  // Union-find over the poses: the used measurements of one point join their poses.
+  std::vector<std::size_t> parent(p.poses.size());
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  const auto find = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  std::vector<std::size_t> firstPoseOfPoint(p.points.size(), p.poses.size());
+  for (std::size_t i = 0; i < p.obs.size(); ++i)
+  {
+    if (!used.empty() && !used[i]) continue;
+    const auto& o = p.obs[i];
+    std::size_t& f = firstPoseOfPoint[o.point];
+    if (f == p.poses.size())
+      f = o.pose;
+    else
+    {
+      const std::size_t a = find(f), b = find(o.pose);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the root is the component's first pose
+    }
+  }
+  std::vector<std::size_t> roots;
+  for (std::size_t i = 0; i < p.poses.size(); ++i)
+    if (find(i) == i) roots.push_back(i);
+  return roots;
+}
+
 TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
 {
   const int nP = static_cast<int>(p.poses.size()), nX = static_cast<int>(p.points.size());
@@ -333,6 +363,12 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
   double cost = robustCost(cams, X, p, opts.huberPx, used);
   res.initialCost = res.finalCost = cost;
   if (p.obs.empty()) return res;
+
+  // The gauge of every connected part of the problem (poses linked by the points they share): a run
+  // that restarted its map (kidnapped, map given up) is several unrelated blocks, each with its own
+  // free pose; the first pose of each is held.
+  const std::vector<std::size_t> held = firstPoseOfEachComponent(p, used);
+  res.components = held.size();
 
   double lambda = 1e-4;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
@@ -363,7 +399,8 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
         for (int b = 0; b < 9; ++b) trip.emplace_back(idx[a], idx[b], H(a, b));
       }
     }
-    for (int a = 0; a < 6; ++a) trip.emplace_back(a, a, 1e10);  // gauge: the first pose stays
+    for (const std::size_t k : held)  // gauge: the first pose of each component stays
+      for (int a = 0; a < 6; ++a) trip.emplace_back(6 * static_cast<int>(k) + a, 6 * static_cast<int>(k) + a, 1e10);
     for (int i = 0; i < n; ++i) trip.emplace_back(i, i, 0.0);   // the whole diagonal in the pattern (damping)
     Eigen::SparseMatrix<double> H(n, n);
     H.setFromTriplets(trip.begin(), trip.end());

@@ -307,6 +307,7 @@ int runReprojection(const std::string& prog, const std::vector<std::string>& arg
     const TBundleResult r = bundleAdjust(prob, bo);
     out << "-- after bundle adjustment (" << r.iterations << " iterations" << (r.converged ? ", converged" : "")
         << (r.unused ? ", " + std::to_string(r.unused) + " measurements behind their camera left out" : "")
+        << (r.components > 1 ? ", " + std::to_string(r.components) + " unrelated blocks, each in its own frame" : "")
         << "; robust cost per measurement " << r.initialCost << " -> " << r.finalCost << " px^2)\n"
         << reprojectionStats(prob).summary();
     writeTumTrajectory(prob.poses, *refined);

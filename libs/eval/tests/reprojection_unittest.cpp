@@ -193,6 +193,36 @@ TEST(Reprojection, ABentTrajectoryShowsAndTheRefinementRecoversTheTrueOne)
   EXPECT_LT(ateAfter, 0.005);  // the path is about 1.8 long
 }
 
+TEST(Reprojection, TwoUnrelatedMapsAreAdjustedEachInItsOwnGauge)
+{
+  // A run that started a new map half way (kidnapped): the second half measures other points, so the
+  // problem is two blocks; each keeps its first pose, and both are recovered.
+  const TScene s = makeScene();
+  const auto cam = pinhole();
+  auto rows = measure(s, *cam, 0.2);
+  // Poses 30-59 see other points (ids + 1000, the same geometry shifted): no point links the halves.
+  for (auto& r : rows)
+    if (r.timestamp > 2.95) r.featureId += 1000;
+  const TTrajectory bent = bend(s.poses, 3.0);
+  TBundleProblem p = makeBundleProblem(rows, bent, *cam, 1e-4, 8);
+  const auto firsts = firstPoseOfEachComponent(p);
+  ASSERT_EQ(firsts.size(), 2u);
+  EXPECT_EQ(firsts[0], 0u);
+  EXPECT_EQ(firsts[1], 30u);
+  const TBundleResult r = bundleAdjust(p);
+  EXPECT_EQ(r.components, 2u);
+  EXPECT_TRUE(r.converged);
+  EXPECT_LE(r.iterations, 30);
+  EXPECT_LT(reprojectionStats(p).rmsPx, 0.3);
+  // Each half held at its first pose and back on the truth up to its own Sim(3).
+  for (const std::size_t k : firsts) EXPECT_LT((p.poses[k].p_W_C - bent[k].p_W_C).norm(), 1e-6) << k;
+  const auto half = [](const TTrajectory& t, std::size_t a, std::size_t b) {
+    return TTrajectory(t.begin() + static_cast<std::ptrdiff_t>(a), t.begin() + static_cast<std::ptrdiff_t>(b));
+  };
+  EXPECT_LT(rmsAfterSim3(half(p.poses, 0, 30), half(s.poses, 0, 30)), 0.005);
+  EXPECT_LT(rmsAfterSim3(half(p.poses, 30, 60), half(s.poses, 30, 60)), 0.005);
+}
+
 TEST(Reprojection, BadInputIsNamed)
 {
   const TScene s = makeScene(10, 10);

@@ -101,12 +101,19 @@ struct TBundleResult
   double initialCost = 0, finalCost = 0;  ///< robust cost per measurement (px^2)
   bool converged = false;                 ///< relative cost decrease below 1e-9 or damping exhausted
   std::size_t unused = 0;                 ///< measurements left out: their point starts behind the camera
+  std::size_t components = 0;             ///< unrelated blocks of poses and points (one per map of the run)
 };
 
+/** The first pose (lowest index) of each connected component of the problem, poses being connected
+ * by the points they measure (measurements with used[i] == 0 ignored; empty `used`: all): one
+ * component per map of a run that started a new map (kidnapped, map given up), each with its own
+ * gauge. A pose measuring nothing is a component of its own. */
+std::vector<std::size_t> firstPoseOfEachComponent(const TBundleProblem& p, const std::vector<char>& used = {});
+
 /** Levenberg-Marquardt bundle adjustment of all poses and points with a Huber cost, sparse normal
- * equations (Eigen SimplicialLDLT). The gauge: the first pose is held by a stiff prior; the scale
- * direction is left to the damping (the cost does not change along it, so neither does the
- * solution). Pose timestamps are kept. */
+ * equations (Eigen SimplicialLDLT). The gauge: the first pose of each connected component
+ * (firstPoseOfEachComponent()) is held by a stiff prior; the scale direction is left to the damping
+ * (the cost does not change along it, so neither does the solution). Pose timestamps are kept. */
 TBundleResult bundleAdjust(TBundleProblem& problem, const TBundleOptions& opts = {});
 
 }  // namespace immslam::eval
