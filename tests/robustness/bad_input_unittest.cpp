@@ -436,6 +436,35 @@ TEST(RobustDataset, TimestampsThatDoNotAdvanceAreSkippedAndCounted)
     EXPECT_LE(std::stod(splitFields(stats[i], ',')[static_cast<std::size_t>(col)]), 2.0) << stats[i];
 }
 
+TEST(RobustDataset, BlackFirstFramesThenANewFirstMapInTheOutputs)
+{
+  // The lens cap on for the first 5 frames: the full system starts its map at the first textured frame,
+  // straight in SLAM (n_new_first_map), and never again in this run.
+  const std::string d = copyBase("black_start");
+  const auto lines = readRgb(d);
+  for (int k = 0; k < 5; ++k)
+  {
+    cv::Mat g = cv::imread(d + "/" + lines[k].path, cv::IMREAD_UNCHANGED);
+    g.setTo(0);
+    cv::imwrite(d + "/" + lines[k].path, g);
+  }
+  const auto r = runApp({src("ini/imm7-shadow.ini"), d, "--out", d + "/out"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  readAndCheckOutputs(d + "/out");
+  const auto stats = readLines(d + "/out/frame_stats.csv");
+  ASSERT_EQ(stats.size(), 41u);
+  const auto header = splitFields(stats[0], ',');
+  ASSERT_EQ(header.back(), "n_new_first_map");
+  for (std::size_t k = 0; k < 40; ++k)
+  {
+    const int n = std::stoi(splitFields(stats[k + 1], ',').back());
+    if (k == 5)
+      EXPECT_GE(n, 20) << stats[k + 1];
+    else
+      EXPECT_EQ(n, 0) << "frame " << k;
+  }
+}
+
 TEST(RobustDataset, UnreadableImagesAreSkippedAndCounted)
 {
   const std::string d = copyBase("unreadable_png");
