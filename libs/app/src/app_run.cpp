@@ -351,7 +351,7 @@ int CImmMonoSlamApp::runImpl()
     ++m_summary.framesRead;
     auto skip = [&](const std::string& reason) {
       ++m_summary.framesSkipped;
-      // The first 20 reasons are logged and kept; a rawlog of many sensors (IMU at 200 Hz, a second
+      // The first kLoggedSkips reasons are logged and kept; a rawlog of many sensors (IMU at 200 Hz, a second
       // camera) would otherwise bury the log: the rest are counted (summary line).
       if (m_summary.skipReasons.size() < kLoggedSkips)
       {

@@ -102,7 +102,6 @@ struct CRawlogSource::Impl
   // First-pass results.
   std::size_t firstPassEntries = 0;
   std::size_t items = 0;
-  std::size_t images = 0;                          ///< items with a camera image (any sensor)
   std::map<std::string, std::size_t> imageLabels;  ///< items with a camera image, by sensor label
   std::vector<std::string> labelOrder;             ///< sensor labels of images, first seen first
   std::string wantedLabel;                         ///< the constructor's choice (empty: the first)
@@ -195,7 +194,6 @@ struct CRawlogSource::Impl
           ++otherClasses[it.className];
           continue;
         }
-        ++images;
         if (imageLabels[it.obs->sensorLabel]++ == 0) labelOrder.push_back(it.obs->sensorLabel);
         // The calibration of the first image of the sensor used (the first sensor unless one is asked for).
         if (calib || it.obs->sensorLabel != (wantedLabel.empty() ? labelOrder.front() : wantedLabel)) continue;
@@ -245,7 +243,7 @@ struct CRawlogSource::Impl
   /** An input without a single image is an error (not an empty run): names the file and what it holds. */
   void requireImages() const
   {
-    if (images > 0) return;
+    if (!imageLabels.empty()) return;
     std::string what;
     if (firstPassEntries == 0)
       what = "is empty (no object)";

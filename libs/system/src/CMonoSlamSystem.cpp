@@ -12,6 +12,11 @@ namespace
 {
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+/** Features that addFeaturesAt() did add (ids >= 0; -1 where the patch did not fit). */
+int countAdded(const std::vector<std::int64_t>& ids)
+{
+  return static_cast<int>(std::count_if(ids.begin(), ids.end(), [](std::int64_t id) { return id >= 0; }));
+}
 }  // namespace
 
 void CMonoSlamSystem::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
@@ -118,7 +123,7 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
         ids.push_back(p.id);
       }
       const auto added = m_slam->addFeaturesAt(grey, uv, prior, ids);
-      m_frame.promoted = static_cast<int>(std::count_if(added.begin(), added.end(), [](auto id) { return id >= 0; }));
+      m_frame.promoted = countAdded(added);
       // SLAM features rejected frame after frame: handed back to the shadow filter at their pixel.
       if (m_opts.handover_rejections > 0)
       {
@@ -162,9 +167,7 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
       else
       {
         const auto added = m_slam->addFeaturesAt(grey, uv);
-        if (firstMap)
-          m_frame.newFirstMap =
-              static_cast<int>(std::count_if(added.begin(), added.end(), [](auto id) { return id >= 0; }));
+        if (firstMap) m_frame.newFirstMap = countAdded(added);
       }
     }
   }
