@@ -17,7 +17,8 @@ printf '[input]\n' > "$TMP/empty.ini"
   echo
   echo "The camera is not a section of the shipped configs: it comes from the input (calib.txt, the rawlog's"
   echo "\`cameraParams\`) or \`--calib FILE\`. A \`[camera]\` section (MRPT \`[CAMERA_PARAMS]\` keys: \`resolution\`, \`cx\`,"
-  echo "\`cy\`, \`fx\`, \`fy\`, \`dist\`, \`distortion_model\`; or \`model = pinhole|opencv|davison\` with \`kd1\`; or"
+  echo "\`cy\`, \`fx\`, \`fy\`, \`dist\`, \`distortion_model\` = \`none\`, \`plumb_bob\` or \`kannala_brandt\`; or"
+  echo "\`model = pinhole|opencv|davison|fisheye\` with \`kd1\` (davison) or \`dist\` (fisheye: \`[k1 k2 k3 k4]\`); or"
   echo "\`calib_file = path\`) is used for live cameras. Precedence: \`--calib\` > \`[camera]\` > the input's own."
   "$BIN" "$TMP/empty.ini" --print-config | awk '
     /^\[/ { sec=$0; gsub(/[\[\]]/, "", sec); printf "\n## [%s]\n\n| key | default | meaning |\n|---|---|---|\n", sec; next }

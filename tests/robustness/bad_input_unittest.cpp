@@ -675,7 +675,8 @@ TEST(RobustCalib, MalformedCalibTxtIsAnErrorNamingFileAndLine)
   const std::vector<TCase> cases{
       {"pinhole 320 240 240 abc 159.5 119.5\n", ":1", "fy"},
       {"# comment\npinhole 320 240 240 240 159.5\n", ":2", "needs"},
-      {"fisheye 320 240 240 240 159.5 119.5\n", ":1", "unknown camera model"},
+      {"fishye 320 240 240 240 159.5 119.5\n", ":1", "unknown camera model"},
+      {"fisheye 320 240 240 240 159.5 119.5\n", ":1", "needs 10 values"},
       {"pinhole 320 240 -240 240 159.5 119.5\n", ":1", "fx"},
       {"pinhole 0 240 240 240 159.5 119.5\n", ":1", "width"},
       {"pinhole 320.5 240 240 240 159.5 119.5\n", ":1", "width"},

@@ -33,6 +33,41 @@ TEST(SystemSynthetic, HandheldSingleModelAteWithinOnePercentOfPath)
   EXPECT_LE(s.ate->rmseOverPath, 0.01);
 }
 
+TEST(SystemSynthetic, FisheyeLensDefaultConfigAteWithinOnePercentOfPath)
+{
+  // The hand-held path through the TUM-VI fisheye lens (190 degrees along the diagonal, black corners),
+  // with the default configuration: the camera model is used end to end (search, warps, inverse depth,
+  // shadow filter, relocalisation) and the lens mask keeps new features inside the image circle.
+  app::TRunSummary s;
+  const std::string out = outDir("handheld_fisheye");
+  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", "--out", out, "--set",
+                    "input.scenario=scenarios/handheld-fisheye.ini", "--set", "output.plots=false", "--set",
+                    "output.search_log=true"},
+                   &s),
+            0);
+  ASSERT_TRUE(s.ate.has_value());
+  std::printf("handheld fisheye, full system: ATE %.4f = %.3f %% of path (%zu poses)\n", s.ate->rmse,
+              100 * s.ate->rmseOverPath, s.ate->nPairs);
+  EXPECT_EQ(s.framesProcessed, s.ate->nPairs);
+  EXPECT_LE(s.ate->rmseOverPath, 0.01);
+  // Every measurement lies inside the image circle (radius f * 90 degrees about the principal point).
+  const auto rows = readCsv(out + "/searches.csv");
+  ASSERT_GT(rows.size(), 1000u);
+  const auto& head = rows.front();
+  const auto col = [&](const std::string& name) { return std::find(head.begin(), head.end(), name) - head.begin(); };
+  const std::size_t cu = col("z_u"), cv = col("z_v"), cf = col("found");
+  ASSERT_LT(cf, head.size());
+  std::size_t found = 0;
+  for (std::size_t i = 1; i < rows.size(); ++i)
+  {
+    if (rows[i][cf] != "1") continue;
+    ++found;
+    const double r = std::hypot(std::stod(rows[i][cu]) - 254.93, std::stod(rows[i][cv]) - 256.90);
+    EXPECT_LT(r, 190.97 * M_PI / 2) << "row " << i;
+  }
+  EXPECT_GT(found, 1000u);
+}
+
 TEST(SystemRealData, VispRbtAteWithinThreePercentOfPath)
 {
   if (!haveSharedData("visp_rbt")) GTEST_SKIP() << "../shared/data/visp_rbt is absent";

@@ -1,6 +1,7 @@
 /* imm-monoslam — calib.txt: parsing, loading, saving, and the model factory. */
 #include <immslam/camera/CCameraModel.h>
 #include <immslam/camera/CDavisonCamera.h>
+#include <immslam/camera/CFisheyeCamera.h>
 #include <immslam/camera/COpenCVCamera.h>
 #include <immslam/camera/CPinholeCamera.h>
 
@@ -24,12 +25,13 @@ struct TModelSpec
   std::vector<const char*> params;
 };
 
-const std::array<TModelSpec, 3>& modelSpecs()
+const std::array<TModelSpec, 4>& modelSpecs()
 {
-  static const std::array<TModelSpec, 3> specs{{
+  static const std::array<TModelSpec, 4> specs{{
       {"pinhole", {"fx", "fy", "cx", "cy"}},
       {"opencv", {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"}},
       {"davison", {"fx", "fy", "cx", "cy", "kd1"}},
+      {"fisheye", {"fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"}},
   }};
   return specs;
 }
@@ -54,7 +56,7 @@ std::string joinNames(const TModelSpec& spec) { return "WIDTH HEIGHT " + paramNa
 
 std::string unknownModelMessage(const std::string& model)
 {
-  return "unknown camera model '" + model + "' (expected pinhole, opencv or davison)";
+  return "unknown camera model '" + model + "' (expected pinhole, opencv, davison or fisheye)";
 }
 
 std::string stripComment(const std::string& line)
@@ -111,6 +113,8 @@ CCameraModel::Ptr makeCameraModel(
   if (model == "opencv")
     return std::make_shared<COpenCVCamera>(
         width, height, p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8]);
+  if (model == "fisheye")
+    return std::make_shared<CFisheyeCamera>(width, height, p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]);
   return std::make_shared<CDavisonCamera>(width, height, p[0], p[1], p[2], p[3], p[4]);
 }
 
@@ -183,7 +187,7 @@ CCameraModel::Ptr loadCalibFile(const std::string& path)
   if (!cam)
     throw std::runtime_error(
         path + ": no model line (expected one line MODEL WIDTH HEIGHT PARAMS..., MODEL one of "
-               "pinhole, opencv, davison)");
+               "pinhole, opencv, davison, fisheye)");
   return cam;
 }
 

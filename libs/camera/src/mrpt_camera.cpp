@@ -1,5 +1,6 @@
 /* imm-monoslam — our camera models <-> MRPT's TCamera and [CAMERA_PARAMS] config sections. */
 #include <immslam/camera/CDavisonCamera.h>
+#include <immslam/camera/CFisheyeCamera.h>
 #include <immslam/camera/COpenCVCamera.h>
 #include <immslam/camera/CPinholeCamera.h>
 #include <immslam/camera/mrpt_camera.h>
@@ -115,8 +116,12 @@ CCameraModel::Ptr fromTCamera(const mrpt::img::TCamera& cam)
       return std::make_shared<CPinholeCamera>(w, h, cam.fx(), cam.fy(), cam.cx(), cam.cy());
     case mrpt::img::DistortionModel::plumb_bob:
       break;
+    case mrpt::img::DistortionModel::kannala_brandt:
+      return std::make_shared<CFisheyeCamera>(w, h, cam.fx(), cam.fy(), cam.cx(), cam.cy(), cam.k1(), cam.k2(),
+                                              cam.k3(), cam.k4());
     default:
-      throw std::runtime_error("TCamera: the kannala_brandt (fisheye) distortion model is not supported");
+      throw std::runtime_error("TCamera: unknown distortion model " +
+                               std::to_string(static_cast<int>(cam.distortion)));
   }
   if (cam.k4() != 0 || cam.k5() != 0 || cam.k6() != 0)
     throw std::runtime_error("TCamera: the rational distortion coefficients k4 k5 k6 are not supported");
@@ -140,6 +145,11 @@ std::optional<mrpt::img::TCamera> toTCamera(const CCameraModel& cam)
   if (const auto* cv = dynamic_cast<const COpenCVCamera*>(&cam))
   {
     t.setDistortionPlumbBob(cv->k1(), cv->k2(), cv->p1(), cv->p2(), cv->k3());
+    return t;
+  }
+  if (const auto* fe = dynamic_cast<const CFisheyeCamera*>(&cam))
+  {
+    t.setDistortionKannalaBrandt(fe->k1(), fe->k2(), fe->k3(), fe->k4());
     return t;
   }
   return std::nullopt;
@@ -198,9 +208,9 @@ CCameraModel::Ptr loadCameraFromConfig(
     else if (dm.empty())
       model = allZero(dist) ? "pinhole" : "opencv";
     else if (dm == "kannala_brandt")
-      r.fail("distortion_model", "kannala_brandt (fisheye) is not supported");
+      model = "fisheye";
     else
-      r.fail("distortion_model", "unknown value '" + dm + "' (expected none or plumb_bob)");
+      r.fail("distortion_model", "unknown value '" + dm + "' (expected none, plumb_bob or kannala_brandt)");
   }
 
   try
@@ -219,6 +229,15 @@ CCameraModel::Ptr loadCameraFromConfig(
     }
     if (model == "davison")
       return std::make_shared<CDavisonCamera>(w, h, fx, fy, cx, cy, r.requiredDouble("kd1"));
+    if (model == "fisheye")
+    {
+      // MRPT's order for kannala_brandt: dist = [k1 k2 k3 k4].
+      if (!r.has("dist")) throw std::runtime_error(r.where() + ": missing key 'dist' (" + model + ": [k1 k2 k3 k4])");
+      if (dist.size() != 4)
+        r.fail("dist", "expected 4 coefficients [k1 k2 k3 k4] for the fisheye (kannala_brandt) model, got " +
+                           std::to_string(dist.size()));
+      return std::make_shared<CFisheyeCamera>(w, h, fx, fy, cx, cy, dist[0], dist[1], dist[2], dist[3]);
+    }
   }
   catch (const std::runtime_error& e)
   {
@@ -226,7 +245,7 @@ CCameraModel::Ptr loadCameraFromConfig(
     if (msg.rfind(r.where(), 0) == 0) throw;
     throw std::runtime_error(r.where() + ": " + msg);
   }
-  r.fail("model", "unknown value '" + model + "' (expected pinhole, opencv or davison)");
+  r.fail("model", "unknown value '" + model + "' (expected pinhole, opencv, davison or fisheye)");
 }
 
 std::vector<std::string> cameraConfigKeys()

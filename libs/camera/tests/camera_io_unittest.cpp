@@ -86,7 +86,8 @@ TEST(CalibFile, MalformedLinesAreRejectedWithContext)
   const std::map<std::string, std::string> cases = {
       {"", "empty calibration line"},
       {"   # only a comment", "empty calibration line"},
-      {"fisheye 320 240 170 170 160 120", "unknown camera model 'fisheye'"},
+      {"fishye 320 240 170 170 160 120", "unknown camera model 'fishye'"},
+      {"fisheye 320 240 170 170 160 120", "needs 10 values"},
       {"pinhole 320 240 170 170 160", "needs 6 values after the model name"},
       {"pinhole 320 240 170 170 160 120 7", "got 7"},
       {"opencv 752 480 458 457 367 248 -0.28 0.07 0.0001 0.00001", "needs 11 values"},
@@ -216,6 +217,15 @@ TEST(MrptCamera, TCameraRoundTrip)
   expectSameModel(*fromTCamera(*te), *euroc);
   expectSameModel(*fromTCamera(*toTCamera(*test::strongOpenCVCamera())), *test::strongOpenCVCamera());
 
+  // Fisheye <-> kannala_brandt: MRPT keeps k3 k4 in dist[4], dist[5] (its k3(), k4()).
+  const auto tumvi = test::tumviCamera();
+  const auto tf = toTCamera(*tumvi);
+  ASSERT_TRUE(tf.has_value());
+  EXPECT_EQ(tf->distortion, mrpt::img::DistortionModel::kannala_brandt);
+  EXPECT_EQ(tf->k3(), tumvi->k3());
+  EXPECT_EQ(tf->dist[5], tumvi->k4());
+  expectSameModel(*fromTCamera(*tf), *tumvi);
+
   EXPECT_FALSE(toTCamera(*test::monoslamCamera()).has_value());
 }
 
@@ -234,8 +244,14 @@ TEST(MrptCamera, FromTCameraEdgeCases)
   EXPECT_EQ(fromTCamera(t)->modelName(), "opencv");
   t.k4(0.01);
   EXPECT_NE(errorOf([&] { fromTCamera(t); }).find("k4"), std::string::npos);
-  t.setDistortionKannalaBrandt(0.1, 0, 0, 0);
-  EXPECT_NE(errorOf([&] { fromTCamera(t); }).find("kannala_brandt"), std::string::npos);
+  t.setDistortionKannalaBrandt(0.1, -0.02, 0.003, -0.0004);
+  const auto fe = fromTCamera(t);
+  EXPECT_EQ(fe->modelName(), "fisheye");
+  EXPECT_EQ(fe->parameters(), (std::vector<double>{500, 501, 320, 240, 0.1, -0.02, 0.003, -0.0004}));
+  const auto back = toTCamera(*fe);
+  ASSERT_TRUE(back.has_value());
+  EXPECT_EQ(back->distortion, mrpt::img::DistortionModel::kannala_brandt);
+  EXPECT_EQ(back->getDistortionParamsAsVector(), (std::vector<double>{0.1, -0.02, 0.003, -0.0004}));
   mrpt::img::TCamera zero;  // all zero
   EXPECT_THROW(fromTCamera(zero), std::runtime_error);
   zero.ncols = 0;
@@ -287,7 +303,7 @@ TEST(MrptCamera, LoadsConfigSectionVariants)
 
 TEST(MrptCamera, ReadsSectionsWrittenByMrpt)
 {
-  for (const CCameraModel::Ptr& cam : {test::testCameras()[0].cam, CCameraModel::Ptr(test::eurocCamera())})
+  for (const CCameraModel::Ptr& cam : {test::testCameras()[0].cam, CCameraModel::Ptr(test::eurocCamera()), CCameraModel::Ptr(test::tumviCamera())})
   {
     mrpt::config::CConfigFileMemory cfg;
     toTCamera(*cam)->saveToConfigFile("CAMERA_PARAMS", cfg);
@@ -321,12 +337,14 @@ TEST(MrptCamera, ConfigErrorsNameSectionAndKey)
       {"model = opencv\n", "missing key 'dist'"},
       {"distortion_model = plumb_bob\n", "missing key 'dist'"},
       {"model = davison\nkd1 = x\n", "key 'kd1': 'x' is not a number"},
-      {"model = fisheye\n", "key 'model': unknown value 'fisheye'"},
+      {"model = fishye\n", "key 'model': unknown value 'fishye'"},
+      {"model = fisheye\n", "missing key 'dist'"},
+      {"distortion_model = kannala_brandt\n", "missing key 'dist'"},
+      {"distortion_model = kannala_brandt\ndist = [0.1 0 0 0 0]\n", "key 'dist': expected 4 coefficients"},
       {"model = pinhole\ndist = [0.1 0 0 0 0]\n", "key 'dist'"},
       {"dist = [0.1 0 0]\n", "key 'dist': expected 4, 5 or 8"},
       {"dist = [0.1 0 0 0 0 0.2 0 0]\n", "k4 k5 k6"},
       {"dist = [0.1 zz 0 0 0]\n", "key 'dist': 'zz' is not a number"},
-      {"distortion_model = kannala_brandt\ndist = [0.1 0 0 0]\n", "key 'distortion_model'"},
       {"distortion_model = equidistant\n", "key 'distortion_model': unknown value"},
   };
   for (const auto& [extra, expected] : cases)

@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <opencv2/calib3d.hpp>
 #include <immslam/math/numerical_jacobian.h>
 
 #include <atomic>
@@ -369,4 +370,82 @@ TEST(DavisonCamera, ScalingThatOverflowsKd1IsRefusedWithAClearError)
     EXPECT_NE(std::string(e.what()).find("davison camera: scaling by 0.5"), std::string::npos) << e.what();
   }
   EXPECT_NO_THROW((void)cam.scaled(2.0));  // kd1 / 4 stays finite
+}
+
+TEST(FisheyeCamera, MatchesOpenCVsFisheyeModel)
+{
+  // OpenCV's cv::fisheye is the reference implementation of the model (its documentation's formula);
+  // project the same points through both.
+  const std::vector<std::shared_ptr<const CFisheyeCamera>> cams{
+      test::tumviCamera(),
+      std::make_shared<CFisheyeCamera>(640, 480, 300, 301, 319.5, 239.5, -0.012, 0.0051, -0.0013, 0.00015)};
+  for (const auto& cam : cams)
+  {
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<double> angle(0, 1.5), phi(-M_PI, M_PI), dist(0.1, 30);
+    std::vector<cv::Point3d> pts;
+    for (int i = 0; i < 500; ++i)
+    {
+      const double th = angle(rng), ph = phi(rng), d = dist(rng);
+      pts.emplace_back(d * std::sin(th) * std::cos(ph), d * std::sin(th) * std::sin(ph), d * std::cos(th));
+    }
+    const cv::Matx33d K(cam->fx(), 0, cam->cx(), 0, cam->fy(), cam->cy(), 0, 0, 1);
+    const cv::Vec4d D(cam->k1(), cam->k2(), cam->k3(), cam->k4());
+    std::vector<cv::Point2d> ref;
+    cv::fisheye::projectPoints(pts, ref, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, D);
+    double worst = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i)
+    {
+      Vec2 uv;
+      ASSERT_TRUE(cam->project(Vec3(pts[i].x, pts[i].y, pts[i].z), uv));
+      worst = std::max(worst, (uv - Vec2(ref[i].x, ref[i].y)).norm());
+    }
+    EXPECT_LT(worst, 1e-9);
+  }
+}
+
+TEST(FisheyeCamera, PixelsBeyondTheHemisphereUnprojectToTheLimitRay)
+{
+  // TUM-VI's 512x512 corners lie outside its image circle, beyond 90 degrees from the axis: they
+  // unproject to the ray at the limit, in front of the camera, with finite Jacobians.
+  const auto cam = test::tumviCamera();
+  EXPECT_NEAR(cam->maxAngle(), 0.5 * M_PI, 1e-8);
+  for (const Vec2& corner : {Vec2(-0.5, -0.5), Vec2(511.5, 511.5), Vec2(-0.5, 511.5)})
+  {
+    Mat32 J;
+    const Vec3 b = cam->unproject(corner, &J).unitVector();
+    EXPECT_GT(b.z(), 0);
+    EXPECT_LT(b.z(), 1e-6);
+    EXPECT_TRUE(J.allFinite());
+    Vec2 uv;
+    EXPECT_TRUE(cam->project(b, uv));  // the limit ray still projects (on the image circle)
+    EXPECT_LT((uv - Vec2(cam->cx(), cam->cy())).norm(), (corner - Vec2(cam->cx(), cam->cy())).norm());
+  }
+  // 80 degrees off the axis towards a corner is inside the image (the diagonal sees more than 180).
+  Vec2 uv;
+  const double s80 = std::sin(80 * M_PI / 180);
+  ASSERT_TRUE(cam->project(Vec3(s80 * M_SQRT1_2, s80 * M_SQRT1_2, std::cos(80 * M_PI / 180)), uv));
+  EXPECT_TRUE(cam->isInImage(uv));
+}
+
+TEST(FisheyeCamera, FoldOfTheAngleMapIsRespected)
+{
+  // theta_d = theta (1 - 0.5 theta^2): slope 1 - 1.5 theta^2 vanishes at theta = sqrt(2/3).
+  const CFisheyeCamera cam(640, 480, 300, 300, 319.5, 239.5, -0.5, 0, 0, 0);
+  EXPECT_NEAR(cam.maxAngle(), std::sqrt(2.0 / 3.0), 1e-12);
+  Vec2 uv;
+  const double inside = 0.99 * cam.maxAngle(), beyond = 1.01 * cam.maxAngle();
+  EXPECT_TRUE(cam.project(Vec3(std::sin(inside), 0, std::cos(inside)), uv));
+  EXPECT_FALSE(cam.project(Vec3(std::sin(beyond), 0, std::cos(beyond)), uv));
+  // A pixel beyond the largest distorted angle: the ray at the fold.
+  const double rMax = 300 * cam.distortAngle(cam.maxAngle());
+  const Vec3 b = cam.unproject(Vec2(319.5 + rMax + 20, 239.5)).unitVector();
+  EXPECT_NEAR(std::atan2(b.head<2>().norm(), b.z()), cam.maxAngle(), 1e-9);
+  // Inside, the inverse is exact.
+  for (const double th : {0.0, 1e-12, 1e-6, 0.1, 0.5, 0.8})
+  {
+    if (th >= cam.maxAngle()) continue;
+    EXPECT_NEAR(cam.undistortAngle(cam.distortAngle(th)), th, 1e-14);
+  }
+  EXPECT_THROW(CFisheyeCamera(640, 480, 300, 300, 319.5, 239.5, std::nan(""), 0, 0, 0), std::runtime_error);
 }

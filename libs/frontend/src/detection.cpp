@@ -2,6 +2,7 @@
 #include <immslam/frontend/frontend.h>
 
 #include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -83,6 +84,8 @@ std::vector<TCorner> detectInEmptyCells(const cv::Mat& grey, const std::vector<V
     throw std::runtime_error("frontend::detectInEmptyCells: gridCols and gridRows must be >= 1");
   if (p.shiTomasiHalfWindow < 1)
     throw std::runtime_error("frontend::detectInEmptyCells: shiTomasiHalfWindow must be >= 1");
+  if (!p.validMask.empty() && (p.validMask.type() != CV_8UC1 || p.validMask.size() != grey.size()))
+    throw std::runtime_error("frontend::detectInEmptyCells: validMask must be empty or a CV_8UC1 image of the image's size");
   std::vector<TCorner> out;
   if (maxNew <= 0) return out;
 
@@ -107,6 +110,7 @@ std::vector<TCorner> detectInEmptyCells(const cv::Mat& grey, const std::vector<V
     if (u < border || v < border || u > W - 1 - border || v > H - 1 - border) continue;
     const int cell = cellOf(u, v, W, H, cols, rows);
     if (cellBusy[cell]) continue;
+    if (!p.validMask.empty() && !p.validMask.at<std::uint8_t>(v, u)) continue;
     bool nearOccupied = false;
     for (const Vec2& o : occupied)
     {
@@ -153,5 +157,31 @@ std::vector<TCorner> detectInEmptyCells(const cv::Mat& grey, const std::vector<V
     if (static_cast<int>(out.size()) >= maxNew) break;
   }
   return out;
+}
+cv::Mat lensMask(const camera::CCameraModel& cam, int margin)
+{
+  const int W = cam.width(), H = cam.height();
+  const auto imaged = [&](int u, int v) {
+    const Vec2 uv(u, v);
+    const Vec3 b = cam.unproject(uv).unitVector();
+    Vec2 back;
+    return b.allFinite() && cam.project(b, back) && (back - uv).norm() < 0.05;
+  };
+  // The models' limits are radii about a principal point inside the image (a fold, 90 degrees): when
+  // the whole border is imaged so is the inside, and the per-pixel pass is skipped.
+  bool borderImaged = true;
+  for (int u = 0; u < W && borderImaged; ++u) borderImaged = imaged(u, 0) && imaged(u, H - 1);
+  for (int v = 0; v < H && borderImaged; ++v) borderImaged = imaged(0, v) && imaged(W - 1, v);
+  if (borderImaged) return cv::Mat();
+  cv::Mat mask(H, W, CV_8UC1);
+  for (int v = 0; v < H; ++v)
+  {
+    auto* row = mask.ptr<std::uint8_t>(v);
+    for (int u = 0; u < W; ++u) row[u] = imaged(u, v) ? 255 : 0;
+  }
+  if (margin > 0)
+    cv::erode(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * margin + 1, 2 * margin + 1)),
+              cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(255));
+  return mask;
 }
 }  // namespace immslam::frontend

@@ -3,6 +3,9 @@
 #include "test_images.h"
 
 #include <gtest/gtest.h>
+#include <immslam/camera/CFisheyeCamera.h>
+#include <immslam/camera/COpenCVCamera.h>
+#include <immslam/camera/CPinholeCamera.h>
 
 #include <Eigen/Cholesky>
 #include <opencv2/core.hpp>
@@ -69,6 +72,47 @@ TEST(Detection, CornersOnlyInEmptyCellsFarFromOccupiedWithinBorders)
     EXPECT_EQ(again[i].uv, corners[i].uv);
     EXPECT_EQ(again[i].score, corners[i].score);
   }
+}
+
+TEST(Detection, LensMaskKeepsCornersInsideAFisheyesImageCircle)
+{
+  // Pinhole and radial models image every pixel: no mask, no per-pixel pass.
+  EXPECT_TRUE(lensMask(camera::CPinholeCamera(320, 240, 240, 240, 159.5, 119.5), 12).empty());
+  EXPECT_TRUE(lensMask(camera::COpenCVCamera(752, 480, 458.654, 457.296, 367.215, 248.375, -0.28340811, 0.07395907,
+                                             0.00019359, 1.76187114e-05, 0),
+                       12)
+                  .empty());
+  // A 180-degree equidistant lens whose image circle (radius f pi/2 = 141 px) fits inside 320x320.
+  const camera::CFisheyeCamera fe(320, 320, 90, 90, 159.5, 159.5, 0, 0, 0, 0);
+  const int margin = 12;
+  const cv::Mat mask = lensMask(fe, margin);
+  ASSERT_FALSE(mask.empty());
+  ASSERT_EQ(mask.type(), CV_8UC1);
+  const double radius = 90 * M_PI / 2;
+  for (int v = 0; v < 320; v += 3)
+    for (int u = 0; u < 320; u += 3)
+    {
+      const double r = std::hypot(u - 159.5, v - 159.5);
+      if (r < radius - margin - 1.5)
+      {
+        EXPECT_EQ(mask.at<std::uint8_t>(v, u), 255) << u << "," << v;
+      }
+      else if (r > radius - margin + 1.5)
+      {
+        EXPECT_EQ(mask.at<std::uint8_t>(v, u), 0) << u << "," << v;
+      }
+    }
+  // Texture everywhere, as if the lens imaged the corners: corners only where the mask allows.
+  const cv::Mat img = makeTexture(320, 320, 1);
+  TDetectorParams p;
+  const auto all = detectInEmptyCells(img, {}, 48, p);
+  p.validMask = mask;
+  const auto inside = detectInEmptyCells(img, {}, 48, p);
+  ASSERT_GT(inside.size(), 10u);
+  EXPECT_GT(std::count_if(all.begin(), all.end(), [&](const TCorner& c) { return !mask.at<std::uint8_t>(int(c.uv.y()), int(c.uv.x())); }), 0);
+  for (const auto& c : inside) EXPECT_LT(std::hypot(c.uv.x() - 159.5, c.uv.y() - 159.5), radius - margin + 1.5);
+  p.validMask = cv::Mat(10, 10, CV_8UC1, cv::Scalar(255));
+  EXPECT_THROW(detectInEmptyCells(img, {}, 48, p), std::runtime_error);
 }
 
 TEST(Detection, NothingOnFlatImageOrFullGridOrZeroRequest)

@@ -105,7 +105,11 @@ CRenderer::CRenderer(camera::CCameraModel::Ptr cam, int threads)
       {
         const Vec3 b = m_cam->unproject(Vec2(u, v)).unitVector();
         const std::size_t i = static_cast<std::size_t>(v) * m_w + u;
-        m_valid[i] = b.allFinite() && b.z() > 0;
+        // A pixel whose ray does not project back onto it lies outside what the lens images (a
+        // fisheye's corners beyond its image circle, beyond a distortion's fold): black, as in a real
+        // camera.
+        Vec2 back;
+        m_valid[i] = b.allFinite() && b.z() > 0 && m_cam->project(b, back) && (back - Vec2(u, v)).norm() < 0.05;
         m_bearings[i] = m_valid[i] ? b : Vec3(0, 0, 1);
       }
   });

@@ -73,7 +73,9 @@ TRelocalisation relocalise(const cv::Mat& grey, const camera::CCameraModel& cam,
   kps.erase(std::remove_if(kps.begin(), kps.end(),
                            [&](const cv::KeyPoint& k) {
                              const int u = cvRound(k.pt.x), v = cvRound(k.pt.y);
-                             return u < half + 1 || v < half + 1 || u >= grey.cols - half - 1 || v >= grey.rows - half - 1;
+                             return u < half + 1 || v < half + 1 || u >= grey.cols - half - 1 || v >= grey.rows - half - 1 ||
+                                    (!p.validMask.empty() && p.validMask.size() == grey.size() &&
+                                     !p.validMask.at<std::uint8_t>(v, u));
                            }),
             kps.end());
   std::stable_sort(kps.begin(), kps.end(), [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });

@@ -18,7 +18,8 @@ namespace immslam::camera
  * analytic Jacobians (checked against numerical ones in camera_unittest).
  *
  * Implementations: CPinholeCamera, COpenCVCamera (radial-tangential k1 k2 p1 p2 k3),
- * CDavisonCamera (one-parameter wide-angle model of MonoSLAM, see ../shared/data/README.md).
+ * CDavisonCamera (one-parameter wide-angle model of MonoSLAM, see ../shared/data/README.md),
+ * CFisheyeCamera (Kannala-Brandt, OpenCV's cv::fisheye, MRPT's kannala_brandt).
  * Objects are immutable and shared through Ptr. */
 class CCameraModel
 {
@@ -27,7 +28,7 @@ class CCameraModel
 
   virtual ~CCameraModel() = default;
 
-  /** The calib.txt model word: "pinhole", "opencv" or "davison". */
+  /** The calib.txt model word: "pinhole", "opencv", "davison" or "fisheye". */
   virtual std::string modelName() const = 0;
 
   /** Parameters after the image size, in calib.txt order (fx fy cx cy [distortion...]). */

@@ -41,7 +41,20 @@ struct TDetectorParams
    * image's contrast.) */
   double minShiTomasi = 0.01;
   int shiTomasiHalfWindow = 3;  ///< the structure tensor is averaged over (2*this+1)^2 pixels
+  /** Optional CV_8UC1 mask of the image's size: corners only where it is non-zero (empty: the whole
+   * image). See lensMask(): keeps corners off a fisheye's black corners and its image circle. */
+  cv::Mat validMask;
 };
+
+/** Where the lens images the world: the pixels whose ray (unproject) projects back onto them (within
+ * 0.05 px), eroded by `margin` px (so a patch around an allowed pixel holds only imaged pixels), as a
+ * CV_8UC1 mask (255 allowed). Empty when every pixel is imaged (pinhole, the usual radial
+ * distortions): nothing to mask. Non-empty for a fisheye whose corners lie beyond 90 degrees or
+ * beyond its distortion's fold (CFisheyeCamera, COpenCVCamera), whose corners are black in real
+ * images and whose image circle would give corners that do not belong to the world. The models'
+ * limits are radii about the principal point, so when every border pixel is imaged the mask is
+ * empty without visiting the inside. */
+cv::Mat lensMask(const camera::CCameraModel& cam, int margin);
 
 /** Contrast-normalized Shi-Tomasi response at the integer pixel (u, v):
  * \f$ s = \lambda_{min}(M) / (\sigma_I^2 + 1) \f$, where
@@ -64,8 +77,9 @@ double normalizedShiTomasi(const cv::Mat& grey, int u, int v, int halfWindow = 3
  * FAST (OpenCV, non-maximum suppression) candidates are scored by normalizedShiTomasi (computed
  * only at the candidates), those below minShiTomasi dropped, then chosen greedily by decreasing
  * score (ties broken by position: deterministic); a cell whose best candidate is too close to an
- * already chosen corner may get its next best.
- * \throws std::runtime_error if grey is not a non-empty CV_8UC1 image or the grid is empty. */
+ * already chosen corner may get its next best. With p.validMask, only where the mask is non-zero.
+ * \throws std::runtime_error if grey is not a non-empty CV_8UC1 image, the grid is empty, or
+ * p.validMask is neither empty nor a CV_8UC1 image of grey's size. */
 std::vector<TCorner> detectInEmptyCells(
     const cv::Mat& grey, const std::vector<Vec2>& occupied, int maxNew, const TDetectorParams& p);
 

@@ -353,6 +353,7 @@ class CMonoSlamIMM
   TOptions m_opts;
   COnePointRansac m_ransac;
   camera::CCameraModel::Ptr m_cam;
+  cv::Mat m_lensMask;  ///< where new features and relocalisation corners may be (frontend::lensMask; empty: anywhere)
   std::vector<motion::TMotionModel> m_models;
   std::unique_ptr<bayes::CIMMEstimator> m_imm;
   std::unique_ptr<math::CThreadPool> m_pool;

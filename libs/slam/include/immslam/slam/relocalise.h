@@ -44,6 +44,7 @@ struct TRelocaliseParams
   double reprojectionPx = 2.5;  ///< RANSAC inlier threshold (px, at the mean focal length)
   int minInliers = 8;           ///< fewer PnP inliers: no relocalisation
   int ransacIterations = 300;
+  cv::Mat validMask;  ///< optional CV_8UC1 mask: corners only where non-zero (frontend::lensMask)
 };
 
 struct TRelocalisation
