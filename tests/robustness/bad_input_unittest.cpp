@@ -780,6 +780,10 @@ TEST(RobustConfig, NanNegativeAndZeroNoiseAreRejectedNamingTheKey)
       {"imm.probability_floor=-1", "[imm] probability_floor"},
       {"imm.prior=[nan 0 0 0 0 0 1]", "[imm] prior"},
       {"imm.prior=[-1 1 1 0 0 0 0]", "[imm] prior"},
+      {"system.pending_weight=nan", "[system] pending_weight"},
+      {"system.pending_weight=1.5", "[system] pending_weight"},
+      {"system.pending_weight=0.5x", "[system] pending_weight"},
+      {"system.pending_weight=automatic", "[system] pending_weight"},
   };
   for (const auto& cfg : {kSingle, kImm7})
     for (const auto& [set, what] : cases)

@@ -5,6 +5,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
+#include <stdexcept>
+#include <string>
 
 namespace immslam::system
 {
@@ -17,7 +20,27 @@ int countAdded(const std::vector<std::int64_t>& ids)
 {
   return static_cast<int>(std::count_if(ids.begin(), ids.end(), [](std::int64_t id) { return id >= 0; }));
 }
+/** Memory of the automatic pending weight: outcome counts decay by this factor per frame (~100 frames). */
+constexpr double kOutcomeDecay = 0.99;
 }  // namespace
+
+double CMonoSlamSystem::TOptions::parsePendingWeight(const std::string& text, const std::string& section)
+{
+  if (text == "auto") return -1.0;
+  std::size_t used = 0;
+  double w = std::numeric_limits<double>::quiet_NaN();
+  try
+  {
+    w = std::stod(text, &used);
+  }
+  catch (const std::exception&)
+  {
+    used = 0;
+  }
+  if (used != text.size() || !(w >= 0 && w <= 1))
+    throw std::runtime_error("[" + section + "] pending_weight = '" + text + "': expected a number in [0, 1] or 'auto'");
+  return w;
+}
 
 void CMonoSlamSystem::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
@@ -25,6 +48,8 @@ void CMonoSlamSystem::TOptions::loadFromConfigFile(const mrpt::config::CConfigFi
   IMMSLAM_LOAD_INT(handover_rejections);
   IMMSLAM_LOAD_INT(starved_below);
   IMMSLAM_LOAD_INT(release_min_measured);
+  IMMSLAM_LOAD_STRING(pending_weight);
+  parsePendingWeight(pending_weight, s);
   core::requireNonNegative(handover_rejections, s, "handover_rejections");
   core::requireNonNegative(starved_below, s, "starved_below");
   core::requirePositive(release_min_measured, s, "release_min_measured");
@@ -38,6 +63,7 @@ void CMonoSlamSystem::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& 
   MRPT_SAVE_CONFIG_VAR_COMMENT(starved_below,
                                "SLAM short of features (fewer in view): release unresolved shadow features (0: never)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(release_min_measured, "frames a shadow feature must be tracked to be released");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(pending_weight, "weight of a pending shadow feature in the count of features in view, in [0, 1], or auto (the recent fraction of pending features that ended in SLAM)");
 }
 
 CMonoSlamSystem::CMonoSlamSystem(const mrpt::config::CConfigFileBase& cfg, camera::CCameraModel::Ptr cam)
@@ -47,6 +73,7 @@ CMonoSlamSystem::CMonoSlamSystem(const mrpt::config::CConfigFileBase& cfg, camer
   m_bankOpts.loadFromConfigFile(cfg, "imm");
   m_ransacOpts.loadFromConfigFile(cfg, "ransac");
   m_shadowOpts.loadFromConfigFile(cfg, "shadow");
+  m_pendingWeight = TOptions::parsePendingWeight(m_opts.pending_weight, "system");
   m_slam = std::make_unique<slam::CMonoSlamIMM>(m_slamOpts, m_bankOpts, m_ransacOpts, cam);
   if (m_opts.shadow_filter)
     m_shadow = std::make_unique<shadow::CShadowFilter>(m_shadowOpts, cam, [this] { return m_slam->allocateId(); });
@@ -145,6 +172,10 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
         }
       }
       for (const auto& v : srep.views) pendingVisible += (v.cls == shadow::EShadowClass::Pending && v.searched) ? 1 : 0;
+      // Outcomes of the pending features that left the shadow filter this frame (pendingWeight()).
+      const int became = srep.nPromoted + m_frame.released;
+      m_becameSlam = kOutcomeDecay * m_becameSlam + became;
+      m_left = kOutcomeDecay * m_left + became + srep.nNewDynamic + srep.nLost + srep.nTimedOut;
       avoid = m_shadow->occupiedPixels();
       m_frame.shadowMs = msSince(ts);
     }
@@ -154,7 +185,7 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
     // as at the first frame, straight in SLAM even with the shadow filter, which could only classify
     // against a dead-reckoned camera (the IMM's stationary and rotation models keep the depths open).
     const bool firstMap = !holding && slamInView + m_frame.promoted == 0;
-    const int visible = slamInView + pendingVisible;
+    const int visible = slamInView + static_cast<int>(std::lround(pendingWeight() * pendingVisible));
     const int want = holding    ? 0
                      : firstMap ? so.initial_features
                                 : std::clamp(so.min_visible_features - visible, 0, so.max_new_features_per_frame);
@@ -175,6 +206,16 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
   m_prevQ = m_slam->cameraOrientation();
   m_frame.totalMs = msSince(t0);
   return m_frame;
+}
+
+double CMonoSlamSystem::pendingWeight() const
+{
+  if (m_pendingWeight >= 0) return m_pendingWeight;
+  // The recent fraction of pending features that ended in SLAM (promoted static, or released), with
+  // a prior of one each way: in a static scene most pending features become SLAM features and count
+  // almost fully; where many are on moving objects (decided dynamic, lost) they count less, and more
+  // candidates are detected for the static world.
+  return (1.0 + m_becameSlam) / (2.0 + m_left);
 }
 
 void CMonoSlamSystem::effectiveConfig(const mrpt::config::CConfigFileBase& cfg, mrpt::config::CConfigFileBase& out)

@@ -55,6 +55,13 @@ class CMonoSlamSystem
     int starved_below = 20;
     /** ... if tracked for at least this many frames. */
     int release_min_measured = 10;
+    /** Weight of a pending shadow feature (searched in this frame) in the count of features in view
+     * that decides how many new features to detect ([slam] min_visible_features): a number in [0, 1],
+     * or "auto": the recent fraction of pending features that ended in SLAM (see pendingWeight()). */
+    std::string pending_weight = "auto";
+    /** The weight of a pending_weight text: the number, or -1 for "auto".
+     * \throws std::runtime_error naming [section] pending_weight if it is neither. */
+    static double parsePendingWeight(const std::string& text, const std::string& section);
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
     void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
   };
@@ -72,6 +79,11 @@ class CMonoSlamSystem
   /** The shadow filter, or null when off. */
   const shadow::CShadowFilter* shadowFilter() const { return m_shadow.get(); }
   const TOptions& options() const { return m_opts; }
+  /** The weight of a pending shadow feature in the count of features in view now: [system]
+   * pending_weight, or with "auto" (1 + b) / (2 + n), b and n the pending features that ended in SLAM
+   * (promoted or released) and that left the shadow filter in any way (also decided dynamic, lost,
+   * timed out), both decayed by 0.99 per frame (about the last 100 frames). */
+  double pendingWeight() const;
 
   /** Loads every section's options from cfg (defaults where absent) and writes them, with their
    * comments, into out: the effective configuration without building the system. */
@@ -90,6 +102,8 @@ class CMonoSlamSystem
   std::unique_ptr<slam::CMonoSlamIMM> m_slam;
   std::unique_ptr<shadow::CShadowFilter> m_shadow;
   TSystemFrame m_frame;
+  double m_pendingWeight = 1.0;        ///< fixed [system] pending_weight (< 0: auto)
+  double m_becameSlam = 0, m_left = 0; ///< decayed counts of pending features that left the shadow filter
   Vec3 m_prevR = Vec3::Zero();
   Vec4 m_prevQ = Vec4(1, 0, 0, 0);
 };
