@@ -59,6 +59,7 @@ struct TRun
   std::vector<double> onObjects;  ///< fraction of the frame's matches lying on moving objects
   std::vector<std::string> dominant;
   int covChecks = 0;
+  double pendingWeight = 1;  ///< the system's pending-feature weight after the last frame
 };
 
 /** Relative asymmetry and smallest LDLT pivot (relative to the largest diagonal entry). */
@@ -106,6 +107,9 @@ TRun runSystem(const std::string& config, const TSequence& seq, const TModifier&
     const Vec3 r = slam.cameraPosition();
     const Vec4 q = slam.cameraOrientation();
     EXPECT_TRUE(r.allFinite() && q.allFinite()) << at;
+    EXPECT_GT(sys.pendingWeight(), 0.0) << at;
+    EXPECT_LE(sys.pendingWeight(), 1.0) << at;
+    run.pendingWeight = sys.pendingWeight();
     EXPECT_NEAR(q.norm(), 1.0, 1e-9) << at;
     const VecX mu = slam.modelProbabilities();
     EXPECT_TRUE(mu.allFinite()) << at;
@@ -506,9 +510,10 @@ TEST(RobustConditions, StillCameraWatchingOnlyMovingObjects)
     std::string domText;
     for (const auto& [name, n] : dom) domText += " " + name + ":" + std::to_string(n);
     std::printf("[ result   ] still camera, only moving objects, %-14s frames %zu | drift: max |r| %.3f units, max "
-                "rotation %.1f deg | matched median %.0f | on objects median %.0f %% | dominant model frames%s\n",
+                "rotation %.1f deg | matched median %.0f | on objects median %.0f %% | dominant model frames%s | "
+                "pending weight at the end %.2f\n",
                 cfg.c_str(), run.est.size(), maxPos, maxRotDeg, medianOf(run.matched, run, 0, 1000),
-                100 * eval::median(run.onObjects), domText.c_str());
+                100 * eval::median(run.onObjects), domText.c_str(), run.pendingWeight);
     EXPECT_EQ(run.est.size(), seq.frames.size());
   }
 }
@@ -585,5 +590,35 @@ TEST(RobustDeterminism, SameOutputsOnRepeatsAndAnyThreadCount)
       else
         EXPECT_TRUE(e == first) << "run " << n << " (num_threads " << threads << ") differs from the first";
     }
+  }
+}
+
+TEST(RobustConditions, PendingWeightIsANumberInZeroOneOrAuto)
+{
+  using system::CMonoSlamSystem;
+  EXPECT_EQ(CMonoSlamSystem::TOptions::parsePendingWeight("auto", "system"), -1.0);
+  EXPECT_EQ(CMonoSlamSystem::TOptions::parsePendingWeight("0.25", "system"), 0.25);
+  EXPECT_EQ(CMonoSlamSystem::TOptions::parsePendingWeight("1", "system"), 1.0);
+  for (const std::string bad : {"", "-0.1", "1.01", "nan", "0.5x", "Auto", "inf"})
+  {
+    try
+    {
+      CMonoSlamSystem::TOptions::parsePendingWeight(bad, "system");
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    }
+    catch (const std::runtime_error& e)
+    {
+      EXPECT_NE(std::string(e.what()).find("[system] pending_weight"), std::string::npos) << e.what();
+    }
+  }
+  // With a fixed weight the system reports it; "auto" starts at the prior 1/2.
+  const TSequence seq = render("ini/scenarios/handheld.ini", 2, {});
+  for (const auto& [text, expected] : std::vector<std::pair<std::string, double>>{{"0.3", 0.3}, {"auto", 0.5}})
+  {
+    mrpt::config::CConfigFileMemory cfg;
+    cfg.setContent(test::readFile(src("ini/imm7-shadow.ini")));
+    cfg.write("system", "pending_weight", text);
+    CMonoSlamSystem sys(cfg, seq.sim->camera());
+    EXPECT_DOUBLE_EQ(sys.pendingWeight(), expected) << text;
   }
 }
