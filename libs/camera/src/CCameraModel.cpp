@@ -49,6 +49,14 @@ bool CCameraModel::isInImage(const Vec2& uv, double margin) const
          uv.y() <= m_height - 0.5 - margin;
 }
 
+bool CCameraModel::imagesPixel(const Vec2& uv, Vec3* ray) const
+{
+  const Vec3 b = unproject(uv).unitVector();
+  if (ray) *ray = b;
+  Vec2 back;
+  return b.allFinite() && b.z() > 0 && project(b, back) && (back - uv).norm() < 0.05;
+}
+
 std::string CCameraModel::toCalibLine() const
 {
   std::string line = modelName() + " " + std::to_string(m_width) + " " + std::to_string(m_height);

@@ -420,7 +420,10 @@ TEST(FisheyeCamera, PixelsBeyondTheHemisphereUnprojectToTheLimitRay)
     Vec2 uv;
     EXPECT_TRUE(cam->project(b, uv));  // the limit ray still projects (on the image circle)
     EXPECT_LT((uv - Vec2(cam->cx(), cam->cy())).norm(), (corner - Vec2(cam->cx(), cam->cy())).norm());
+    EXPECT_FALSE(cam->imagesPixel(corner));
   }
+  EXPECT_TRUE(cam->imagesPixel(Vec2(cam->cx(), cam->cy())));
+  EXPECT_TRUE(cam->imagesPixel(Vec2(10, 256)));
   // 80 degrees off the axis towards a corner is inside the image (the diagonal sees more than 180).
   Vec2 uv;
   const double s80 = std::sin(80 * M_PI / 180);

@@ -161,12 +161,7 @@ std::vector<TCorner> detectInEmptyCells(const cv::Mat& grey, const std::vector<V
 cv::Mat lensMask(const camera::CCameraModel& cam, int margin)
 {
   const int W = cam.width(), H = cam.height();
-  const auto imaged = [&](int u, int v) {
-    const Vec2 uv(u, v);
-    const Vec3 b = cam.unproject(uv).unitVector();
-    Vec2 back;
-    return b.allFinite() && cam.project(b, back) && (back - uv).norm() < 0.05;
-  };
+  const auto imaged = [&](int u, int v) { return cam.imagesPixel(Vec2(u, v)); };
   // The models' limits are radii about a principal point inside the image (a fold, 90 degrees): when
   // the whole border is imaged so is the inside, and the per-pixel pass is skipped.
   bool borderImaged = true;

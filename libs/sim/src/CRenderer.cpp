@@ -103,13 +103,11 @@ CRenderer::CRenderer(camera::CCameraModel::Ptr cam, int threads)
     for (int v = y0; v < y1; ++v)
       for (int u = 0; u < m_w; ++u)
       {
-        const Vec3 b = m_cam->unproject(Vec2(u, v)).unitVector();
         const std::size_t i = static_cast<std::size_t>(v) * m_w + u;
-        // A pixel whose ray does not project back onto it lies outside what the lens images (a
-        // fisheye's corners beyond its image circle, beyond a distortion's fold): black, as in a real
-        // camera.
-        Vec2 back;
-        m_valid[i] = b.allFinite() && b.z() > 0 && m_cam->project(b, back) && (back - Vec2(u, v)).norm() < 0.05;
+        // A pixel outside what the lens images (a fisheye's corners beyond its image circle, beyond a
+        // distortion's fold) is black, as in a real camera.
+        Vec3 b;
+        m_valid[i] = m_cam->imagesPixel(Vec2(u, v), &b);
         m_bearings[i] = m_valid[i] ? b : Vec3(0, 0, 1);
       }
   });

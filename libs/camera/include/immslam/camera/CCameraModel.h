@@ -61,6 +61,11 @@ class CCameraModel
    * with margin = h the (2h+1)^2 patch centred on the pixel nearest to uv lies inside the image. */
   bool isInImage(const Vec2& uv, double margin = 0.0) const;
 
+  /** True if the lens images the pixel uv: its ray (unproject) is in front of the camera and projects
+   * back onto uv (within 0.05 px). False outside a fisheye's image circle beyond 90 degrees or beyond
+   * a distortion's fold, where unproject() returns the limit ray. \param ray if given, the unit ray. */
+  bool imagesPixel(const Vec2& uv, Vec3* ray = nullptr) const;
+
   /** One line of calib.txt: "MODEL W H PARAMS..." (full precision). */
   std::string toCalibLine() const;
 
