@@ -39,7 +39,7 @@ CMonoSlamIMM::CMonoSlamIMM(const TOptions& opts, const TIMMBankOptions& bank, co
   m_factors.resize(r);
   m_focal = 0.5 * (m_cam->fx() + m_cam->fy());
   m_sigmaPixel = m_opts.sigma_pixel;
-  m_lensMask = frontend::lensMask(*m_cam, std::max(m_opts.border_px, 2 * m_opts.patch_half_size + 1));
+  m_lensMask = frontend::lensMask(*m_cam, detectionBorderPx());
   initialiseState();
 }
 

@@ -448,7 +448,7 @@ std::vector<frontend::TCorner> CMonoSlamIMM::findNewFeatureCandidates(const cv::
   p.gridCols = m_opts.grid_cols;
   p.gridRows = m_opts.grid_rows;
   p.minDistancePx = m_opts.min_corner_distance_px;
-  p.borderPx = std::max(m_opts.border_px, 2 * m_opts.patch_half_size + 1);
+  p.borderPx = detectionBorderPx();
   p.minShiTomasi = m_opts.min_shi_tomasi;
   p.validMask = m_lensMask;
   return frontend::detectInEmptyCells(grey, occupied, maxNew, p);

@@ -34,6 +34,7 @@
 #include <mrpt/config/CLoadableOptions.h>
 #include <opencv2/core/mat.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <memory>
 #include <optional>
@@ -353,6 +354,9 @@ class CMonoSlamIMM
   TOptions m_opts;
   COnePointRansac m_ransac;
   camera::CCameraModel::Ptr m_cam;
+  /** New features keep this far from the image border: [slam] border_px, at least the stored patch
+   * region (2 patch_half_size + 1). The lens mask is eroded by the same margin. */
+  int detectionBorderPx() const { return std::max(m_opts.border_px, 2 * m_opts.patch_half_size + 1); }
   cv::Mat m_lensMask;  ///< where new features and relocalisation corners may be (frontend::lensMask; empty: anywhere)
   std::vector<motion::TMotionModel> m_models;
   std::unique_ptr<bayes::CIMMEstimator> m_imm;
