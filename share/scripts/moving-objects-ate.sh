@@ -5,7 +5,9 @@
 # Control: the same three boxes standing still at the centre of their paths (amplitude and spin 0):
 # the full system's ATE with objects that occlude and add texture but do not move. Last two columns: the
 # full system's trajectory_refined.txt ([output] refine_trajectory: an offline bundle adjustment of the
-# run's own matches) without and with the objects.
+# run's own matches) without and with the objects. Last two: the paper's Fig. 5(a) baseline, the moving
+# objects' features disabled ([input] exclusion_masks = the renderer's masks: no feature starts and no
+# match is accepted on them), for the IMM without shadow filter and for the full system.
 # Usage: share/scripts/moving-objects-ate.sh [BUILD_DIR] [OUT_DIR] [SEED...]   (default build, /tmp/moving-ate, 7 11 23 42 101)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -16,7 +18,7 @@ SEEDS=("$@")
 [ ${#SEEDS[@]} -eq 0 ] && SEEDS=(7 11 23 42 101)
 mkdir -p "$OUT"
 ate() { "$BUILD/bin/imm-monoslam" "$1" "$2" --out "$3" --no-gui --quiet "${@:4}" | grep -o '= [0-9.]* % of path' | head -n 1 | tr -dc '0-9.'; }
-printf 'seed  full/no-objects  full/objects  ratio  imm7/objects  single/objects  full/still-boxes  refined/no-objects  refined/objects\n'
+printf 'seed  full/no-objects  full/objects  ratio  imm7/objects  single/objects  full/still-boxes  refined/no-objects  refined/objects  imm7/disabled  full/disabled\n'
 STILL=()
 for k in 1 2 3; do STILL+=(--set "object$k.amplitude=0" --set "object$k.spin_deg_s=[0 0 0]"); done
 for s in "${SEEDS[@]}"; do
@@ -34,6 +36,8 @@ for s in "${SEEDS[@]}"; do
   c=$(ate ini/imm7.ini "$OUT/handheld-moving-$s" "$OUT/out-noshadow-$s")
   d=$(ate ini/single.ini "$OUT/handheld-moving-$s" "$OUT/out-single-$s")
   e=$(ate ini/imm7-shadow.ini "$OUT/still-boxes-$s" "$OUT/out-still-$s")
-  printf '%-5s %-16s %-13s %-6s %-13s %-15s %-17s %-19.2f %.2f\n' "$s" "$a" "$b" \
-    "$(awk -v a="$a" -v b="$b" 'BEGIN{printf "%.2f", b/a}')" "$c" "$d" "$e" "$ra" "$rb"
+  f=$(ate ini/imm7.ini "$OUT/handheld-moving-$s" "$OUT/out-disabled-imm7-$s" --set "input.exclusion_masks=$OUT/handheld-moving-$s")
+  g=$(ate ini/imm7-shadow.ini "$OUT/handheld-moving-$s" "$OUT/out-disabled-full-$s" --set "input.exclusion_masks=$OUT/handheld-moving-$s")
+  printf '%-5s %-16s %-13s %-6s %-13s %-15s %-17s %-19.2f %-16.2f %-14s %s\n' "$s" "$a" "$b" \
+    "$(awk -v a="$a" -v b="$b" 'BEGIN{printf "%.2f", b/a}')" "$c" "$d" "$e" "$ra" "$rb" "$f" "$g"
 done

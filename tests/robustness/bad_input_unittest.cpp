@@ -663,6 +663,60 @@ TEST(RobustImageSize, NonUniformMismatchFromTheStartSkipsEveryFrame)
 }
 
 // ------------------------------------------------------------------------------------------------
+// [input] exclusion_masks
+// ------------------------------------------------------------------------------------------------
+
+TEST(RobustExclusionMasks, BadFolderWrongSizeAndMissingTimestamps)
+{
+  // The rendered base folder holds masks/ of a scene without moving objects (all zero): nothing is
+  // excluded, the same run bit for bit as without the key.
+  const std::string d = copyBase("excl_zero");
+  const std::vector<std::string> excl{"--set", "input.exclusion_masks=" + d};
+  auto with = [&](std::vector<std::string> a) {
+    a.insert(a.end(), excl.begin(), excl.end());
+    return a;
+  };
+  const auto none = runApp({kSingle, d, "--out", d + "/out_none"});
+  auto r = runApp(with({kSingle, d, "--out", d + "/out"}));
+  ASSERT_EQ(none.status, 0) << none.err;
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.summary.framesWithoutMask, 0u);
+  EXPECT_EQ(test::readFile(d + "/out/trajectory.txt"), test::readFile(d + "/out_none/trajectory.txt"));
+  // Timestamps the masks' rgb.txt does not list: those frames exclude nothing, counted in a warning.
+  const std::string m = freshDir("excl_partial");
+  fs::copy(d + "/masks", m + "/masks");
+  {
+    const auto lines = readRgb(d);
+    std::ofstream o(m + "/rgb.txt");
+    for (std::size_t i = 0; i < lines.size(); ++i)
+      if (i < 10 || i >= 15) o << lines[i].stamp << " " << lines[i].path << "\n";
+  }
+  r = runApp({kSingle, d, "--out", d + "/out_partial", "--set", "input.exclusion_masks=" + m});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.summary.framesWithoutMask, 5u);
+  EXPECT_EQ(r.summary.framesProcessed, 40u);
+  // A mask of another size than the image: an error naming the frame and the key.
+  const auto lines = readRgb(d);
+  cv::imwrite(d + "/masks/" + fs::path(lines[3].path).filename().string(), cv::Mat(100, 100, CV_8UC1, cv::Scalar(0)));
+  r = runApp(with({kSingle, d, "--out", d + "/out_size"}));
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_TRUE(contains(r.err, "[input] exclusion_masks")) << r.err;
+  EXPECT_TRUE(contains(r.err, "frame 3")) << r.err;
+  EXPECT_TRUE(contains(r.err, "100x100")) << r.err;
+  // An unreadable mask: an error naming its file.
+  std::ofstream(d + "/masks/" + fs::path(lines[3].path).filename().string()) << "not a png";
+  r = runApp(with({kSingle, d, "--out", d + "/out_bad"}));
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_TRUE(contains(r.err, fs::path(lines[3].path).filename().string())) << r.err;
+  // A folder without masks/: an error naming the key and the folder.
+  fs::remove_all(d + "/masks");
+  r = runApp(with({kSingle, d, "--out", d + "/out_nomasks"}));
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_TRUE(contains(r.err, "[input] exclusion_masks")) << r.err;
+  EXPECT_TRUE(contains(r.err, "masks")) << r.err;
+}
+
+// ------------------------------------------------------------------------------------------------
 // Calibration files
 // ------------------------------------------------------------------------------------------------
 

@@ -11,6 +11,7 @@ void TInputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, c
   IMMSLAM_LOAD_DOUBLE(live_frame_rate_hz);
   IMMSLAM_LOAD_STRING(rawlog_sensor_label);
   IMMSLAM_LOAD_INT(max_image_width);
+  IMMSLAM_LOAD_STRING(exclusion_masks);
   core::requireNonNegative(max_image_width, s, "max_image_width");
   core::requirePositive(live_frame_rate_hz, s, "live_frame_rate_hz");
   if (source.empty()) throw std::runtime_error("[" + s + "] source: empty (use 'synthetic' or a path)");
@@ -23,6 +24,7 @@ void TInputOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std
   MRPT_SAVE_CONFIG_VAR_COMMENT(live_frame_rate_hz, "frame rate of live sources without timestamps");
   MRPT_SAVE_CONFIG_VAR_COMMENT(rawlog_sensor_label, "camera (sensorLabel) of a rawlog with several (empty: the first)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(max_image_width, "wider images are processed at 1/2, 1/4, ... size (0: never, the default)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(exclusion_masks, "folder with rgb.txt and masks/: per-frame masks of pixels with no new feature or SLAM match (empty: none)");
 }
 
 void TOutputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)

@@ -6,6 +6,7 @@
 #include <immslam/app/app_options.h>
 #include <immslam/camera/mrpt_camera.h>
 #include <immslam/core/config.h>
+#include <immslam/eval/classification_truth.h>
 #include <immslam/eval/reprojection.h>
 #include <immslam/eval/statistics.h>
 #include <immslam/io/CImageSource.h>
@@ -76,7 +77,36 @@ struct TImageReduction
     cv::resize(f.grey(kept), f.grey, small, 0, 0, cv::INTER_AREA);
     if (!f.colour.empty()) cv::resize(f.colour(kept), f.colour, small, 0, 0, cv::INTER_AREA);
   }
+  /** A full-size exclusion mask for the reduced frame: a reduced pixel is excluded if any of the
+   * full-size pixels it averages is. */
+  cv::Mat applyToMask(const cv::Mat& m) const
+  {
+    if (factor <= 1 || m.size() != full) return m;
+    cv::Mat small;
+    cv::resize(m(kept), small, cv::Size(kept.width / factor, kept.height / factor), 0, 0, cv::INTER_AREA);
+    return small != 0;
+  }
 };
+
+/** [input] exclusion_masks: the mask of a frame (non-zero: excluded) at the processed image size, or
+ * an empty image when the folder has none for the frame's timestamp.
+ * \throws std::runtime_error naming the frame and the key for a mask of another size. */
+cv::Mat exclusionMaskFor(const eval::TMaskProvider& maskAt, const io::TFrame& frame, const TImageReduction& reduction)
+{
+  const std::optional<eval::TMaskImage> m = maskAt(frame.timestamp);
+  if (!m) return cv::Mat();
+  cv::Mat mask(m->height, m->width, CV_8UC1, const_cast<std::uint8_t*>(m->pixels.data()));
+  mask = reduction.applyToMask(mask != 0);
+  if (mask.size() != frame.grey.size())
+  {
+    std::ostringstream s;
+    s << "frame " << frame.index << " (" << frame.origin << "): [input] exclusion_masks: mask of " << m->width << "x"
+      << m->height << " pixels for an image of " << (reduction.factor > 1 ? reduction.full : frame.grey.size()).width
+      << "x" << (reduction.factor > 1 ? reduction.full : frame.grey.size()).height;
+    throw std::runtime_error(s.str());
+  }
+  return mask;
+}
 
 /** A path from the config: relative to the config's folder if it exists there, else as given. */
 std::string resolvePath(const std::string& p, const std::string& configDir)
@@ -271,6 +301,20 @@ int CImmMonoSlamApp::runImpl()
       source = std::make_unique<sim::CSyntheticSource>(resolvePath(inOpts.scenario, m_configDir));
   }
   logStr(mrpt::system::LVL_INFO, "input: " + source->describe());
+  eval::TMaskProvider excludedAt;
+  if (!inOpts.exclusion_masks.empty())
+  {
+    const std::string dir = resolvePath(inOpts.exclusion_masks, m_configDir);
+    try
+    {
+      excludedAt = eval::maskFolderProvider(dir);
+    }
+    catch (const std::exception& e)
+    {
+      throw std::runtime_error("[input] exclusion_masks = " + dir + ": " + e.what());
+    }
+    logStr(mrpt::system::LVL_INFO, "excluded pixels: masks of " + dir + " (no new feature or SLAM match there)");
+  }
   if (!cam)
   {
     cam = source->calibration();
@@ -422,10 +466,18 @@ int CImmMonoSlamApp::runImpl()
         continue;
       }
     }
+    cv::Mat excluded;
+    if (excludedAt)
+    {
+      excluded = exclusionMaskFor(excludedAt, frame, reduction);
+      if (excluded.empty() && m_summary.framesWithoutMask++ == 0)
+        logStr(mrpt::system::LVL_WARN, "frame " + std::to_string(frame.index) + " (" + frame.origin +
+                                           "): no exclusion mask for its timestamp; such frames exclude nothing");
+    }
     const system::TSystemFrame* fr = nullptr;
     try
     {
-      fr = &sys->processFrame(frame.timestamp, frame.grey);
+      fr = &sys->processFrame(frame.timestamp, frame.grey, excluded);
     }
     catch (const std::exception& e)
     {
@@ -484,6 +536,9 @@ int CImmMonoSlamApp::runImpl()
   m_summary.wallSeconds = std::chrono::duration<double>(Clock::now() - tStart).count();
 
   // ---- Final outputs and summary
+  if (m_summary.framesWithoutMask > 0)
+    logStr(mrpt::system::LVL_WARN, "[input] exclusion_masks: " + std::to_string(m_summary.framesWithoutMask) +
+                                       " frame(s) had no mask for their timestamp and excluded nothing");
   out.writeMap(sys->slam());
   m_summary.finalMapSize = static_cast<int>(sys->slam().features().size());
   if (!frameMs.empty())
@@ -511,6 +566,7 @@ int CImmMonoSlamApp::runImpl()
   std::ostringstream s;
   s << std::fixed << std::setprecision(1) << "frames " << m_summary.framesProcessed << " processed";
   if (m_summary.framesSkipped) s << ", " << m_summary.framesSkipped << " skipped";
+  if (m_summary.framesWithoutMask) s << ", " << m_summary.framesWithoutMask << " without exclusion mask";
   s << "; " << m_summary.fps << " fps (median " << std::setprecision(2) << m_summary.medianFrameMs << " ms/frame)"
     << "; map " << m_summary.finalMapSize << " features; median matched " << std::setprecision(0)
     << m_summary.medianMatched;

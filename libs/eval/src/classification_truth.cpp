@@ -114,8 +114,7 @@ TClassificationResult classificationAgainstMasks(const std::vector<TClassificati
   });
 }
 
-TClassificationResult classificationAgainstMaskFolder(const std::vector<TClassificationDecision>& decisions,
-                                                      const std::string& datasetFolder, int radius, double maxDt)
+TMaskProvider maskFolderProvider(const std::string& datasetFolder, double maxDt)
 {
   namespace fs = std::filesystem;
   const fs::path dir(datasetFolder);
@@ -136,14 +135,17 @@ TClassificationResult classificationAgainstMaskFolder(const std::vector<TClassif
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<double> times(entries.size());
   for (std::size_t i = 0; i < entries.size(); ++i) times[i] = entries[i].first;
-  return classificationAgainstMasks(
-      decisions,
-      [&](double t) -> std::optional<TMaskImage> {
-        const std::ptrdiff_t i = detail::nearestTime(times, t, maxDt);
-        if (i < 0) return std::nullopt;
-        return readMaskImage(entries[static_cast<std::size_t>(i)].second);
-      },
-      radius);
+  return [entries = std::move(entries), times = std::move(times), maxDt](double t) -> std::optional<TMaskImage> {
+    const std::ptrdiff_t i = detail::nearestTime(times, t, maxDt);
+    if (i < 0) return std::nullopt;
+    return readMaskImage(entries[static_cast<std::size_t>(i)].second);
+  };
+}
+
+TClassificationResult classificationAgainstMaskFolder(const std::vector<TClassificationDecision>& decisions,
+                                                      const std::string& datasetFolder, int radius, double maxDt)
+{
+  return classificationAgainstMasks(decisions, maskFolderProvider(datasetFolder, maxDt), radius);
 }
 
 std::vector<TGroundTruthPoint> readPointsGroundTruth(const std::string& path)

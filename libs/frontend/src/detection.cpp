@@ -179,4 +179,22 @@ cv::Mat lensMask(const camera::CCameraModel& cam, int margin)
               cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(255));
   return mask;
 }
+
+cv::Mat growExclusion(const cv::Mat& excluded, int radius)
+{
+  if (excluded.empty()) return cv::Mat();
+  if (excluded.type() != CV_8UC1 || radius < 0)
+    throw std::invalid_argument("frontend::growExclusion: need a CV_8UC1 mask and radius >= 0");
+  cv::Mat grown;
+  cv::dilate(excluded != 0, grown, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * radius + 1, 2 * radius + 1)));
+  return grown;
+}
+
+bool maskedAt(const cv::Mat& mask, const Vec2& uv)
+{
+  if (mask.empty() || !uv.allFinite()) return false;
+  const double u = std::round(uv.x()), v = std::round(uv.y());
+  return u >= 0 && v >= 0 && u < mask.cols && v < mask.rows &&
+         mask.at<std::uint8_t>(static_cast<int>(v), static_cast<int>(u)) != 0;
+}
 }  // namespace immslam::frontend

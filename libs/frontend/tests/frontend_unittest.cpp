@@ -115,6 +115,41 @@ TEST(Detection, LensMaskKeepsCornersInsideAFisheyesImageCircle)
   EXPECT_THROW(detectInEmptyCells(img, {}, 48, p), std::runtime_error);
 }
 
+TEST(Detection, ExclusionMaskGrowsByThePatchAndKeepsCornersOff)
+{
+  // One excluded pixel and a 20x10 excluded block: grown in a square of half size 5.
+  cv::Mat ex(240, 320, CV_8UC1, cv::Scalar(0));
+  ex.at<std::uint8_t>(50, 60) = 7;
+  ex(cv::Rect(200, 100, 20, 10)).setTo(1);
+  const cv::Mat g = growExclusion(ex, 5);
+  ASSERT_EQ(g.type(), CV_8UC1);
+  for (int v = 0; v < 240; ++v)
+    for (int u = 0; u < 320; ++u)
+    {
+      const bool nearPixel = std::abs(u - 60) <= 5 && std::abs(v - 50) <= 5;
+      const bool nearBlock = u >= 195 && u <= 224 && v >= 95 && v <= 114;
+      ASSERT_EQ(g.at<std::uint8_t>(v, u) != 0, nearPixel || nearBlock) << u << "," << v;
+    }
+  // maskedAt rounds to the nearest pixel (doc/conventions.md) and is false off the image.
+  EXPECT_TRUE(maskedAt(g, Vec2(65.4, 55.4)));
+  EXPECT_FALSE(maskedAt(g, Vec2(65.6, 50)));
+  EXPECT_FALSE(maskedAt(g, Vec2(-1, -1)));
+  EXPECT_FALSE(maskedAt(g, Vec2(std::nan(""), 50)));
+  EXPECT_FALSE(maskedAt(cv::Mat(), Vec2(60, 50)));
+  EXPECT_TRUE(growExclusion(cv::Mat(), 5).empty());
+  EXPECT_THROW(growExclusion(cv::Mat(10, 10, CV_32F, cv::Scalar(0)), 5), std::invalid_argument);
+  EXPECT_THROW(growExclusion(ex, -1), std::invalid_argument);
+  // As a detector mask (allowed = not excluded): no corner whose patch touches an excluded pixel.
+  cv::Mat half(240, 320, CV_8UC1, cv::Scalar(0));
+  half(cv::Rect(0, 0, 160, 240)).setTo(255);
+  const cv::Mat img = makeTexture(320, 240, 4);
+  TDetectorParams p;
+  p.validMask = growExclusion(half, 5) == 0;
+  const auto corners = detectInEmptyCells(img, {}, 40, p);
+  ASSERT_GT(corners.size(), 5u);
+  for (const auto& c : corners) EXPECT_GE(c.uv.x(), 165) << c.uv.transpose();
+}
+
 TEST(Detection, NothingOnFlatImageOrFullGridOrZeroRequest)
 {
   TDetectorParams p;

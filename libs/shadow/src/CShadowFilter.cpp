@@ -146,7 +146,7 @@ void CShadowFilter::updateFeature(TShadowFeature& f, const Vec2& z)
   ++m_report.nMeasured;
 }
 
-void CShadowFilter::searchAll(const cv::Mat& grey)
+void CShadowFilter::searchAll(const cv::Mat& grey, const cv::Mat& excluded)
 {
   const auto t0 = std::chrono::steady_clock::now();
   double tUpdate = 0;
@@ -168,7 +168,7 @@ void CShadowFilter::searchAll(const cv::Mat& grey)
     f.searched = true;
     ++m_report.nSearched;
     const frontend::TSearchResult res = frontend::searchInEllipse(grey, m_templ, f.predicted, f.S, m_search, m_ws);
-    if (res.found)
+    if (res.found && !frontend::maskedAt(excluded, res.uv))
     {
       const auto tu = std::chrono::steady_clock::now();
       updateFeature(f, res.uv);
@@ -346,14 +346,18 @@ void CShadowFilter::endFrame()
   m_report.timeMs = msSince(m_t0);
 }
 
-const TShadowReport& CShadowFilter::processFrame(const TCameraMotion& motion, const cv::Mat& grey)
+const TShadowReport& CShadowFilter::processFrame(const TCameraMotion& motion, const cv::Mat& grey,
+                                                 const cv::Mat& excluded)
 {
   if (grey.empty() || grey.type() != CV_8UC1 || grey.cols != m_cam->width() || grey.rows != m_cam->height())
     throw std::runtime_error("shadow::CShadowFilter::processFrame: expected a CV_8UC1 image of the camera's size "
                              "at frame " + std::to_string(motion.frame));
+  if (!excluded.empty() && (excluded.type() != CV_8UC1 || excluded.size() != grey.size()))
+    throw std::runtime_error("shadow::CShadowFilter::processFrame: the exclusion mask must be empty or CV_8UC1 of the "
+                             "image's size at frame " + std::to_string(motion.frame));
   beginFrame(motion);
   predictAll(m_motion);
-  searchAll(grey);
+  searchAll(grey, frontend::growExclusion(excluded, m_opts.patch_half_size));
   classifyAndManage();
   endFrame();
   return m_report;

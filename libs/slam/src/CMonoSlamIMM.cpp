@@ -12,10 +12,12 @@
 #include <immslam/slam/state_ops.h>
 
 #include <Eigen/Cholesky>
+#include <opencv2/core.hpp>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace immslam::slam
 {
@@ -40,7 +42,21 @@ CMonoSlamIMM::CMonoSlamIMM(const TOptions& opts, const TIMMBankOptions& bank, co
   m_focal = 0.5 * (m_cam->fx() + m_cam->fy());
   m_sigmaPixel = m_opts.sigma_pixel;
   m_lensMask = frontend::lensMask(*m_cam, detectionBorderPx());
+  m_detectMask = m_lensMask;
   initialiseState();
+}
+
+void CMonoSlamIMM::setExclusionMask(const cv::Mat& excluded)
+{
+  if (!excluded.empty() &&
+      (excluded.type() != CV_8UC1 || excluded.cols != m_cam->width() || excluded.rows != m_cam->height()))
+    throw std::invalid_argument("CMonoSlamIMM::setExclusionMask: expected an empty mask or a CV_8UC1 image of " +
+                                std::to_string(m_cam->width()) + "x" + std::to_string(m_cam->height()) + " pixels");
+  m_excluded = frontend::growExclusion(excluded, m_opts.patch_half_size);
+  m_detectMask = m_lensMask;
+  if (m_excluded.empty()) return;
+  m_detectMask = m_excluded == 0;
+  if (!m_lensMask.empty()) cv::bitwise_and(m_detectMask, m_lensMask, m_detectMask);
 }
 
 CMonoSlamIMM::~CMonoSlamIMM() = default;
@@ -275,6 +291,9 @@ void CMonoSlamIMM::searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& 
     });
   }
 
+  // Excluded pixels (setExclusionMask): a match there is not the feature's.
+  for (auto& j : jobs)
+    if (j.res.found && frontend::maskedAt(m_excluded, j.res.uv)) j.res.found = false;
   double areaSum = 0;
   for (const auto& j : jobs)
   {

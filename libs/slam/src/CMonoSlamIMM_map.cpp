@@ -233,7 +233,7 @@ bool CMonoSlamIMM::tryRelocalise(const cv::Mat& grey)
   p.minNcc = m_opts.min_ncc;
   p.minInliers = m_opts.relocalise_min_inliers;
   p.reprojectionPx = std::max(2.0, 3.0 * m_sigmaPixel);
-  p.validMask = m_lensMask;
+  p.validMask = m_detectMask;
   const TRelocalisation res = relocalise(grey, *m_cam, pts, p);
   m_sawNoMap = res.nCorners >= 4 * p.minInliers && !res.ok;
   m_report.nRelocMatches = res.nCorrespondences;
@@ -450,7 +450,7 @@ std::vector<frontend::TCorner> CMonoSlamIMM::findNewFeatureCandidates(const cv::
   p.minDistancePx = m_opts.min_corner_distance_px;
   p.borderPx = detectionBorderPx();
   p.minShiTomasi = m_opts.min_shi_tomasi;
-  p.validMask = m_lensMask;
+  p.validMask = m_detectMask;
   return frontend::detectInEmptyCells(grey, occupied, maxNew, p);
 }
 

@@ -102,10 +102,11 @@ shadow::TCameraMotion CMonoSlamSystem::cameraMotion(double timestamp, double dt)
   return m;
 }
 
-const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Mat& grey)
+const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Mat& grey, const cv::Mat& excluded)
 {
   const auto t0 = Clock::now();
   m_frame = TSystemFrame();
+  m_slam->setExclusionMask(excluded);
   m_frame.slam = &m_slam->processFrame(timestamp, grey);
   const auto& rep = *m_frame.slam;
   if (rep.frame > 0)
@@ -121,7 +122,7 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
       // Shadow filter with the SLAM's camera motion; promotions into SLAM keep their ids and the
       // shadow's inverse-depth estimate as the prior.
       const auto ts = Clock::now();
-      const auto& srep = m_shadow->processFrame(cameraMotion(timestamp, rep.dtFrames), grey);
+      const auto& srep = m_shadow->processFrame(cameraMotion(timestamp, rep.dtFrames), grey, excluded);
       m_frame.shadow = &srep;
       std::vector<shadow::TPromotion> promotions = srep.promotions;
       if (holding) promotions.clear();

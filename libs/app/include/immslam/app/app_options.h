@@ -25,6 +25,12 @@ struct TInputOptions : public mrpt::config::CLoadableOptions
    * calibration scaled with them). 0 (default): every size as it is; sharp 1280x960 images track
    * better at full size (doc/usage.md), soft or blown-up HD video may find corners only reduced. */
   int max_image_width = 0;
+  /** A folder of per-frame masks of pixels to leave out (non-zero: excluded; e.g. known moving
+   * objects): no new feature starts and no SLAM match is accepted there. The layout of imm-render's
+   * and imm-composite's outputs: rgb.txt (`timestamp rgb/NAME`) and masks/NAME, the mask of the frame
+   * with that timestamp. Empty (default): none. With a rendered folder's truth this is the
+   * MonoSLAMBOT paper's Fig. 5(a) baseline, the dynamic features disabled (doc/shadow.md). */
+  std::string exclusion_masks;
 
   void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
   void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;

@@ -87,6 +87,13 @@ using TMaskProvider = std::function<std::optional<TMaskImage>(double timestamp)>
 TClassificationResult classificationAgainstMasks(const std::vector<TClassificationDecision>& decisions,
                                                  const TMaskProvider& maskAt, int radius = 1);
 
+/** The masks of a rendered dataset folder (imm-render, imm-composite): rgb.txt gives the image file
+ * of each timestamp (`timestamp rgb/NAME`), its mask is masks/NAME; a timestamp not within maxDt of
+ * an rgb.txt entry has no mask (std::nullopt). rgb.txt is read here, each mask when asked for.
+ * \throws std::runtime_error naming the file for a missing rgb.txt or masks/ folder or a malformed
+ *         rgb.txt line (file:line); the provider throws naming the file for an unreadable mask. */
+TMaskProvider maskFolderProvider(const std::string& datasetFolder, double maxDt = 1e-4);
+
 /** classificationAgainstMasks() with the masks of a rendered dataset folder: rgb.txt gives the
  * image file of each timestamp (`timestamp rgb/NAME`), its mask is masks/NAME. Decisions whose
  * timestamp is not within maxDt of an rgb.txt entry are unmatched.

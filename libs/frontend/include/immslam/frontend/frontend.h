@@ -56,6 +56,15 @@ struct TDetectorParams
  * empty without visiting the inside. */
 cv::Mat lensMask(const camera::CCameraModel& cam, int margin);
 
+/** An exclusion mask (non-zero: excluded) grown by `radius` px in a square: a patch of half size
+ * `radius` centred on a pixel left free does not overlap an excluded pixel. CV_8UC1 (255 excluded);
+ * empty for an empty mask. \throws std::invalid_argument if not CV_8UC1 or radius < 0. */
+cv::Mat growExclusion(const cv::Mat& excluded, int radius);
+
+/** True if the pixel nearest uv (lround) is inside the image of `mask` and non-zero there; false for
+ * an empty mask or a non-finite uv. */
+bool maskedAt(const cv::Mat& mask, const Vec2& uv);
+
 /** Contrast-normalized Shi-Tomasi response at the integer pixel (u, v):
  * \f$ s = \lambda_{min}(M) / (\sigma_I^2 + 1) \f$, where
  * \f$ M = \frac{1}{n}\sum_{w} \nabla I \nabla I^\top \f$ is the structure tensor averaged over the

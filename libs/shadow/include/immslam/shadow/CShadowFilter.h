@@ -109,8 +109,11 @@ class CShadowFilter
 
   /** One frame with images: prediction (eq. 2), active search of every feature in its innovation
    * ellipse, update (eqs. 3-5), classification (Sec. III-A), drops. \param grey CV_8UC1, the
-   * camera's size. The report stays valid until the next call. */
-  const TShadowReport& processFrame(const TCameraMotion& motion, const cv::Mat& grey);
+   * camera's size. \param excluded optional CV_8UC1 mask of the same size, non-zero where no match is
+   * accepted (within patch_half_size; CMonoSlamIMM::setExclusionMask). The report stays valid until
+   * the next call. */
+  const TShadowReport& processFrame(const TCameraMotion& motion, const cv::Mat& grey,
+                                    const cv::Mat& excluded = cv::Mat());
 
   /** The same step with known data association and no image (measurement-level simulations,
    * callers with their own front end): z holds (feature id, measured pixel); features absent from
@@ -164,7 +167,7 @@ class CShadowFilter
  private:
   void beginFrame(const TCameraMotion& motion);
   void predictAll(const TCameraMotion& motion);
-  void searchAll(const cv::Mat& grey);
+  void searchAll(const cv::Mat& grey, const cv::Mat& excluded);
   void updateFeature(TShadowFeature& f, const Vec2& z);
   void classifyAndManage();
   void endFrame();

@@ -262,6 +262,14 @@ class CMonoSlamIMM
                                           const std::vector<std::pair<double, double>>& rhoPrior = {},
                                           const std::vector<std::int64_t>& ids = {});
 
+  /** Pixels to leave out (e.g. known moving objects): a CV_8UC1 image of the camera's size, non-zero
+   * where excluded, or empty for none. Until the next call, no new feature is detected and no match
+   * is accepted within patch_half_size of an excluded pixel (a match there counts as not found);
+   * call it before processFrame(). The MonoSLAMBOT paper's Fig. 5(a) baseline, "the dynamic
+   * features disabled", is this with the renderer's object masks (doc/shadow.md).
+   * \throws std::invalid_argument for a mask of another type or size. */
+  void setExclusionMask(const cv::Mat& excluded);
+
   /** A new feature id, unique among the features of this filter and of any tracker that takes its
    * ids from here (the shadow filter). \param ids optional ids for addFeaturesAt (e.g. a promoted
    * shadow feature keeps its id). */
@@ -358,6 +366,8 @@ class CMonoSlamIMM
    * region (2 patch_half_size + 1). The lens mask is eroded by the same margin. */
   int detectionBorderPx() const { return std::max(m_opts.border_px, 2 * m_opts.patch_half_size + 1); }
   cv::Mat m_lensMask;  ///< where new features and relocalisation corners may be (frontend::lensMask; empty: anywhere)
+  cv::Mat m_excluded;     ///< setExclusionMask() grown by patch_half_size (non-zero: excluded; empty: none)
+  cv::Mat m_detectMask;   ///< where new features and relocalisation corners may be: m_lensMask without m_excluded
   std::vector<motion::TMotionModel> m_models;
   std::unique_ptr<bayes::CIMMEstimator> m_imm;
   std::unique_ptr<math::CThreadPool> m_pool;

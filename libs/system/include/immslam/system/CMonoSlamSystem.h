@@ -71,8 +71,10 @@ class CMonoSlamSystem
   CMonoSlamSystem(const mrpt::config::CConfigFileBase& cfg, camera::CCameraModel::Ptr cam);
   ~CMonoSlamSystem();
 
-  /** Processes one 8-bit grey frame of the camera's size. */
-  const TSystemFrame& processFrame(double timestamp, const cv::Mat& grey);
+  /** Processes one 8-bit grey frame of the camera's size. `excluded` (optional, CV_8UC1 of the same
+   * size, non-zero where excluded): pixels where no new feature starts and no SLAM match is accepted
+   * in this frame (CMonoSlamIMM::setExclusionMask; [input] exclusion_masks). */
+  const TSystemFrame& processFrame(double timestamp, const cv::Mat& grey, const cv::Mat& excluded = cv::Mat());
 
   const slam::CMonoSlamIMM& slam() const { return *m_slam; }
   slam::CMonoSlamIMM& slam() { return *m_slam; }
