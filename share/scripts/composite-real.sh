@@ -5,7 +5,8 @@
 # (ini/single.ini) on the composites. Prints per composite and config: frames tracked and the ATE
 # against the AprilTag ground truth (visp_rbt) or, for monoslam_testseq (no ground truth), the
 # deviation from the full system's run on the clean sequence (both as % of path after Sim(3)); and
-# the full system's static/dynamic decisions scored against the masks.
+# the full system's static/dynamic decisions scored against the masks; and the paper's Fig. 5(a)
+# baseline, the IMM with the objects' features disabled ([input] exclusion_masks = the masks).
 # Usage: share/scripts/composite-real.sh [BUILD_DIR] [OUT_DIR] [DATA_DIR]
 #        (defaults: build, /tmp/composite-real, ../shared/data)
 set -euo pipefail
@@ -72,6 +73,10 @@ for seq in ts-small ts-large vi-1 vi-2 vi-3 vi-4; do
     run "ini/$cfg.ini" "$OUT/$seq" "$OUT/$seq-$cfg" "${extra[@]}"
     printf '%-10s %-12s %-7s %s\n' "$seq" "$cfg" "$(frames "$OUT/$seq-$cfg")" "$(ate "$OUT/$seq-$cfg/trajectory.txt" "$ref")"
   done
+  # The paper's Fig. 5(a): the IMM with the objects' features disabled ([input] exclusion_masks).
+  run ini/imm7.ini "$OUT/$seq" "$OUT/$seq-imm7-disabled" --set "input.exclusion_masks=$OUT/$seq"
+  printf '%-10s %-12s %-7s %s\n' "$seq" imm7-disabled "$(frames "$OUT/$seq-imm7-disabled")" \
+    "$(ate "$OUT/$seq-imm7-disabled/trajectory.txt" "$ref")"
   printf '%-10s %s\n' "$seq" "full system decisions: $(rates "$OUT/$seq-imm7-shadow" "$OUT/$seq")"
 done
 
