@@ -794,3 +794,41 @@ TEST(Relocalisation, RepeatedTextureGivesNoWrongPose)
     EXPECT_LT((res.r_CW - t1).norm(), 0.05);  // if a pose is given, it is the right one
   }
 }
+
+// ---- Exclusion masks (setExclusionMask: [input] exclusion_masks) ----
+
+TEST(IMMSlam, ExclusionMaskKeepsNewFeaturesOffTheExcludedPixels)
+{
+  const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 159.5, 119.5});
+  CMonoSlamIMM::TOptions o;
+  o.num_threads = 1;
+  CMonoSlamIMM slam(o, TIMMBankOptions(), COnePointRansac::TOptions(), cam);
+  cv::Mat grey(240, 320, CV_8UC1);
+  cv::RNG(11).fill(grey, cv::RNG::UNIFORM, 0, 255);
+  cv::GaussianBlur(grey, grey, cv::Size(0, 0), 1.5);
+  cv::normalize(grey, grey, 0, 255, cv::NORM_MINMAX);
+  const auto all = slam.findNewFeatureCandidates(grey, 40);
+  ASSERT_GT(std::count_if(all.begin(), all.end(), [](const frontend::TCorner& c) { return c.uv.x() < 170; }), 5);
+  // The left half excluded: no corner whose patch (half size patch_half_size) reaches into it.
+  cv::Mat ex(240, 320, CV_8UC1, cv::Scalar(0));
+  ex(cv::Rect(0, 0, 160, 240)).setTo(3);
+  slam.setExclusionMask(ex);
+  const auto right = slam.findNewFeatureCandidates(grey, 40);
+  ASSERT_GT(right.size(), 5u);
+  for (const auto& c : right) EXPECT_GE(c.uv.x(), 160 + o.patch_half_size) << c.uv.transpose();
+  // The first map too (frame 0 detects with the same mask).
+  slam.processFrame(0.0, grey);
+  ASSERT_GT(slam.features().size(), 5u);
+  for (const auto& f : slam.features())
+  {
+    Vec2 uv;
+    ASSERT_TRUE(predictMeasurement(*cam, slam.fusedMean(), f, uv));
+    EXPECT_GE(uv.x(), 160 + o.patch_half_size - 1e-6) << uv.transpose();
+  }
+  // Cleared by an empty mask; a mask of another size or type is refused.
+  slam.setExclusionMask(cv::Mat());
+  const auto again = slam.findNewFeatureCandidates(grey, 40, {Vec2(-100, -100)});
+  EXPECT_TRUE(std::any_of(again.begin(), again.end(), [](const frontend::TCorner& c) { return c.uv.x() < 160; }));
+  EXPECT_THROW(slam.setExclusionMask(cv::Mat(120, 160, CV_8UC1, cv::Scalar(0))), std::invalid_argument);
+  EXPECT_THROW(slam.setExclusionMask(cv::Mat(240, 320, CV_32F, cv::Scalar(0))), std::invalid_argument);
+}
