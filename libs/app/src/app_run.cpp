@@ -99,10 +99,10 @@ cv::Mat exclusionMaskFor(const eval::TMaskProvider& maskAt, const io::TFrame& fr
   mask = reduction.applyToMask(mask != 0);
   if (mask.size() != frame.grey.size())
   {
+    const cv::Size image = reduction.factor > 1 ? reduction.full : frame.grey.size();
     std::ostringstream s;
     s << "frame " << frame.index << " (" << frame.origin << "): [input] exclusion_masks: mask of " << m->width << "x"
-      << m->height << " pixels for an image of " << (reduction.factor > 1 ? reduction.full : frame.grey.size()).width
-      << "x" << (reduction.factor > 1 ? reduction.full : frame.grey.size()).height;
+      << m->height << " pixels for an image of " << image.width << "x" << image.height;
     throw std::runtime_error(s.str());
   }
   return mask;
