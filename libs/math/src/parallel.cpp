@@ -34,6 +34,21 @@ bool spinUntil(Cond&& cond)
     if (std::chrono::steady_clock::now() - t0 > kSpin) return cond();
   }
 }
+
+/** The ticket: (generation << 32) | (count << 16) | next index. The count of a job travels in the
+ * same atomic word as its generation and next index, so a thread still looping over an earlier
+ * job can never pair that job's ticket with the next job's count: before, a worker late in its
+ * previous job read the new count beside the old ticket, claimed one index too many (run twice, on
+ * two threads) and counted it done, and the caller's wait for done == count never ended (a hang
+ * seen after ~10^5 jobs, with more threads than cores). */
+constexpr int kIndexBits = 16;
+constexpr std::uint64_t kIndexMask = (std::uint64_t(1) << kIndexBits) - 1;
+constexpr int kMaxJobCount = static_cast<int>(kIndexMask);
+
+std::uint64_t packTicket(std::uint32_t gen, int count)
+{
+  return (static_cast<std::uint64_t>(gen) << 32) | (static_cast<std::uint64_t>(count) << kIndexBits);
+}
 }  // namespace
 
 CThreadPool::CThreadPool(unsigned nThreads)
@@ -57,12 +72,13 @@ void CThreadPool::runIndices(std::uint32_t gen)
   for (;;)
   {
     std::uint64_t t = m_ticket.load(std::memory_order_acquire);
-    int k;
+    int k, count;
     do
     {
       if (static_cast<std::uint32_t>(t >> 32) != gen) return;  // a later job: not ours
-      k = static_cast<int>(t & 0xffffffffu);
-      if (k >= m_count.load(std::memory_order_relaxed)) return;
+      k = static_cast<int>(t & kIndexMask);
+      count = static_cast<int>((t >> kIndexBits) & kIndexMask);
+      if (k >= count) return;
     } while (!m_ticket.compare_exchange_weak(t, t + 1, std::memory_order_acq_rel, std::memory_order_acquire));
     // Index k of generation gen is ours: the job cannot change before it is counted done.
     try
@@ -74,7 +90,7 @@ void CThreadPool::runIndices(std::uint32_t gen)
       std::lock_guard<std::mutex> lk(m_mutex);
       if (!m_error) m_error = std::current_exception();
     }
-    if (m_done.fetch_add(1, std::memory_order_acq_rel) + 1 == m_count.load(std::memory_order_relaxed))
+    if (m_done.fetch_add(1, std::memory_order_acq_rel) + 1 == count)
     {
       std::lock_guard<std::mutex> lk(m_mutex);  // the caller may be about to sleep
       m_cvDone.notify_one();
@@ -110,15 +126,19 @@ void CThreadPool::parallelFor(int begin, int end, const std::function<void(int)>
     for (int i = begin; i < end; ++i) f(i);
     return;
   }
+  if (end - begin > kMaxJobCount)
+  {
+    for (int b = begin; b < end; b += kMaxJobCount) parallelFor(b, std::min(end, b + kMaxJobCount), f);
+    return;
+  }
   const int count = end - begin;
   m_job = &f;
   m_begin = begin;
   m_error = nullptr;
   m_done.store(0, std::memory_order_relaxed);
-  m_count.store(count, std::memory_order_relaxed);
   // Publishing the new generation (release) makes the job visible to whoever claims an index.
   const auto gen = static_cast<std::uint32_t>((m_ticket.load(std::memory_order_relaxed) >> 32) + 1);
-  m_ticket.store(static_cast<std::uint64_t>(gen) << 32, std::memory_order_release);
+  m_ticket.store(packTicket(gen, count), std::memory_order_release);
   {
     std::lock_guard<std::mutex> lk(m_mutex);  // no lost wake-up for a worker about to sleep
   }

@@ -159,6 +159,9 @@ TEST(Bearing, AnglesRoundTripAndJacobians)
 
 #include <immslam/math/parallel.h>
 
+#include <algorithm>
+#include <atomic>
+
 TEST(ThreadPool, BackToBackJobsOfEverySizeAndUnevenCosts)
 {
   // Many short jobs in a row (the workers spin between them) and indices of very different cost
@@ -184,6 +187,37 @@ TEST(ThreadPool, BackToBackJobsOfEverySizeAndUnevenCosts)
     else
       EXPECT_EQ(all, ref) << n << " threads";
   }
+}
+
+TEST(ThreadPool, ManyGrowingJobsWithMoreThreadsThanCoresNeitherHangNorRunAnIndexTwice)
+{
+  // Regression: a worker still looping over a job could read the next job's (larger) count beside
+  // the old ticket, claim one index too many and count it done; the index then ran twice and the
+  // caller waited for ever (seen in the app after ~10^5 jobs; here within ~2 * 10^5 with 4 threads
+  // on 2 cores). Jobs of 1, 2, 3 indices in turn, so most jobs are larger than the one before.
+  for (unsigned n : {3u, 4u})
+  {
+    CThreadPool pool(n);
+    std::vector<std::atomic<int>> hits(3);
+    long twice = 0;
+    for (int rep = 0; rep < 150000; ++rep)
+    {
+      const int len = 1 + rep % 3;
+      for (int i = 0; i < len; ++i) hits[i].store(0, std::memory_order_relaxed);
+      pool.parallelFor(0, len, [&](int i) { hits[i].fetch_add(1, std::memory_order_relaxed); });
+      for (int i = 0; i < len; ++i) twice += hits[i].load() != 1 ? 1 : 0;
+    }
+    EXPECT_EQ(twice, 0) << n << " threads";
+  }
+}
+
+TEST(ThreadPool, JobsLargerThanOneTicketRunInParts)
+{
+  // The ticket holds up to 65535 indices; larger ranges run as consecutive jobs, every index once.
+  CThreadPool pool(3);
+  std::vector<unsigned char> hits(200000, 0);
+  pool.parallelFor(-100000, 100000, [&](int i) { hits[static_cast<std::size_t>(i + 100000)]++; });
+  EXPECT_EQ(std::count(hits.begin(), hits.end(), 1), 200000);
 }
 
 TEST(ThreadPool, CoversEveryIndexOnceAndPropagatesErrors)

@@ -46,10 +46,10 @@ class CThreadPool
   std::vector<std::thread> m_workers;
   std::mutex m_mutex;
   std::condition_variable m_cvStart, m_cvDone;
-  /** (generation << 32) | next index offset: claiming an index is one CAS that also checks that
-   * the job is still the one the worker woke up for. */
+  /** (generation << 32) | (index count << 16) | next index offset: claiming an index is one CAS
+   * that also checks that the job, and its count, are still the ones the worker woke up for. */
   std::atomic<std::uint64_t> m_ticket{0};
-  std::atomic<int> m_count{0}, m_done{0};
+  std::atomic<int> m_done{0};
   const std::function<void(int)>* m_job = nullptr;
   int m_begin = 0;
   std::atomic<bool> m_stop{false};
