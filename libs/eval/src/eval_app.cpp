@@ -224,7 +224,11 @@ int runEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ost
       j << "  \"rpe_rotation_rmse_deg\": " << jsonNumber(rpe->rotationRmseDeg) << ",\n";
       j << "  \"rpe_direction_n\": " << rpe->nDirections << ",\n";
       j << "  \"rpe_direction_median_deg\": " << jsonNumber(rpe->directionMedianDeg) << ",\n";
-      j << "  \"rpe_direction_rmse_deg\": " << jsonNumber(rpe->directionRmseDeg);
+      j << "  \"rpe_direction_rmse_deg\": " << jsonNumber(rpe->directionRmseDeg) << ",\n";
+      j << "  \"rpe_scale_ratio_median\": " << jsonNumber(rpe->scaleRatioMedian) << ",\n";
+      j << "  \"rpe_scale_ratio_p10\": " << jsonNumber(rpe->scaleRatioP10) << ",\n";
+      j << "  \"rpe_scale_ratio_p90\": " << jsonNumber(rpe->scaleRatioP90) << ",\n";
+      j << "  \"rpe_scale_log_rms\": " << jsonNumber(rpe->scaleLogRms);
     }
     j << "\n}\n";
     out << j.str();
@@ -261,6 +265,8 @@ int runEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ost
     row("RPE rotation rmse") << num(rpe->rotationRmseDeg) << " deg\n";
     row("RPE direction") << "median " << num(rpe->directionMedianDeg) << " deg, rmse " << num(rpe->directionRmseDeg)
                          << " deg (" << rpe->nDirections << " motions >= " << num(rpe->minMotion) << ")\n";
+    row("RPE local scale") << "median " << num(rpe->scaleRatioMedian) << ", 10-90 % " << num(rpe->scaleRatioP10) << " - "
+                           << num(rpe->scaleRatioP90) << ", log rms " << num(rpe->scaleLogRms) << " (same motions)\n";
   }
   out << s.str();
   return 0;

@@ -32,7 +32,7 @@ TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta, 
   for (size_t k = 0; k + static_cast<size_t>(delta) < pairs.size(); ++k)
     gtLen.push_back((gt[pairs[k + static_cast<size_t>(delta)].second].p_W_C - gt[pairs[k].second].p_W_C).norm());
   r.minMotion = 0.1 * median(gtLen);
-  std::vector<double> dir;
+  std::vector<double> dir, ratio;
   for (size_t k = 0; k + static_cast<size_t>(delta) < pairs.size(); ++k)
   {
     const auto& e0 = est[pairs[k].first];
@@ -56,9 +56,11 @@ TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta, 
     {
       pe.directionDeg = std::atan2(dpE.cross(dpG).norm(), dpE.dot(dpG)) * 180.0 / M_PI;
       dir.push_back(pe.directionDeg);
+      pe.scaleRatio = nE / nG;
+      ratio.push_back(pe.scaleRatio);
     }
     else
-      pe.directionDeg = std::numeric_limits<double>::quiet_NaN();
+      pe.directionDeg = pe.scaleRatio = std::numeric_limits<double>::quiet_NaN();
     tr.push_back(pe.translation);
     rot.push_back(pe.rotationDeg);
     r.errors.push_back(pe);
@@ -75,6 +77,13 @@ TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta, 
   r.nDirections = dir.size();
   r.directionMedianDeg = dir.empty() ? std::numeric_limits<double>::quiet_NaN() : median(dir);
   r.directionRmseDeg = dir.empty() ? std::numeric_limits<double>::quiet_NaN() : rms(dir);
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  r.scaleRatioMedian = ratio.empty() ? kNaN : median(ratio);
+  r.scaleRatioP10 = ratio.empty() ? kNaN : percentile(ratio, 10);
+  r.scaleRatioP90 = ratio.empty() ? kNaN : percentile(ratio, 90);
+  std::vector<double> logs;
+  for (double x : ratio) logs.push_back(std::log(x));
+  r.scaleLogRms = logs.empty() ? kNaN : rms(logs);
   return r;
 }
 }  // namespace immslam::eval

@@ -563,8 +563,41 @@ TEST(Rpe, DirectionErrorIsScaleFreeAndKnown)
   EXPECT_EQ(s2.nDirections, s2.nPairs - 10);  // 10 motions within the still part (and none longer)
   EXPECT_LT(s2.directionRmseDeg, 1e-6);
   size_t nan = 0;
-  for (const auto& e : s2.errors) nan += std::isnan(e.directionDeg) ? 1 : 0;
+  for (const auto& e : s2.errors)
+  {
+    nan += std::isnan(e.directionDeg) ? 1 : 0;
+    EXPECT_EQ(std::isnan(e.scaleRatio), std::isnan(e.directionDeg));
+  }
   EXPECT_EQ(nan, 10u);
+}
+
+TEST(Rpe, LocalScaleRatioShowsAKnownScaleDrift)
+{
+  // A straight path along x at 0.1 per frame; the estimate keeps that step for 29 motions, then
+  // doubles it (a monocular map whose scale jumps by 2): local scales 1 then 2 without alignment.
+  TTrajectory gt, est;
+  for (int k = 0; k < 60; ++k)
+  {
+    gt.push_back(TStampedPose{k / 30.0, Vec3(0.1 * k, 0, 0), Vec4(1, 0, 0, 0)});
+    const double x = k <= 29 ? 0.1 * k : 2.9 + 0.2 * (k - 29);
+    est.push_back(TStampedPose{k / 30.0, Vec3(x, 0, 0), Vec4(1, 0, 0, 0)});
+  }
+  const TRpeResult r = computeRpe(est, gt, 1, EAlignment::SE3);
+  ASSERT_EQ(r.nPairs, 59u);
+  for (size_t k = 0; k < r.errors.size(); ++k) EXPECT_NEAR(r.errors[k].scaleRatio, k < 29 ? 1.0 : 2.0, 1e-9);
+  EXPECT_NEAR(r.scaleRatioMedian, 2.0, 1e-9);  // 30 of the 59 motions are doubled
+  EXPECT_NEAR(r.scaleRatioP10, 1.0, 1e-9);
+  EXPECT_NEAR(r.scaleRatioP90, 2.0, 1e-9);
+  EXPECT_NEAR(r.scaleLogRms, std::log(2.0) * std::sqrt(30.0 / 59.0), 1e-9);
+  // With Sim3 the overall scale s multiplies every ratio; their quotient stays 2.
+  const TRpeResult a = computeRpe(est, gt, 1, EAlignment::Sim3);
+  EXPECT_NEAR(a.errors.back().scaleRatio / a.errors.front().scaleRatio, 2.0, 1e-9);
+  EXPECT_NEAR(a.errors.front().scaleRatio, a.scale, 1e-9);
+  // No drift: every ratio 1, log rms 0.
+  const TRpeResult same = computeRpe(gt, gt, 3, EAlignment::SE3);
+  EXPECT_NEAR(same.scaleRatioP10, 1.0, 1e-12);
+  EXPECT_NEAR(same.scaleRatioP90, 1.0, 1e-12);
+  EXPECT_NEAR(same.scaleLogRms, 0.0, 1e-12);
 }
 
 // ---------------------------------------------------------------------------------------------

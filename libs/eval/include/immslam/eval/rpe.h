@@ -19,6 +19,10 @@ struct TRpePairError
   /** Angle between dp_est and dp_gt, degrees: the direction of the relative translation, free of
    * any scale (monocular SLAM); NaN when either translation is shorter than TRpeResult::minMotion. */
   double directionDeg = 0;
+  /** Local scale |s dp_est| / |dp_gt|: 1 where the estimate's scale over this motion is the
+   * trajectory's overall one; its spread over a run is the scale drift of a monocular estimate.
+   * NaN where directionDeg is (a ground-truth motion too short to measure). */
+  double scaleRatio = 0;
 };
 
 /** Result of computeRpe(). */
@@ -39,6 +43,10 @@ struct TRpeResult
   size_t nDirections = 0;        ///< relative motions with a direction error
   double directionMedianDeg = 0; ///< median direction error (degrees; NaN if none)
   double directionRmseDeg = 0;   ///< RMS direction error
+  /** Local scale ratios (TRpePairError::scaleRatio) of the motions with a direction: median, 10th and
+   * 90th percentiles, and the RMS of their logarithm (0 without drift; ln 2 = 0.69 for a factor 2);
+   * NaN if none. */
+  double scaleRatioMedian = 0, scaleRatioP10 = 0, scaleRatioP90 = 0, scaleLogRms = 0;
   std::vector<TRpePairError> errors;  ///< one per compared relative motion, in time order
 };
 
@@ -49,7 +57,9 @@ struct TRpeResult
  * only s matters: from the Sim3 Umeyama alignment of the associated positions (a = Sim3) or 1
  * (SE3, None). The direction error of the relative translation (scale-free) is computed for the
  * motions whose ground-truth translation is at least 10 % of the median one (shorter ones are
- * dominated by ground-truth noise and have no direction to speak of).
+ * dominated by ground-truth noise and have no direction to speak of), and so is the local scale
+ * |s dp_est| / |dp_gt| of those motions (the scale drift of a monocular estimate: with a Sim3
+ * alignment 1 means the run's overall scale).
  * \param delta step in associated pairs (>= 1): 1 = consecutive associated frames.
  * \throws std::invalid_argument if delta < 1; std::runtime_error if fewer than delta + 1 pairs. */
 TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta = 1,
