@@ -17,6 +17,7 @@ TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta, 
                       double maxDt)
 {
   if (delta < 1) throw std::invalid_argument("computeRpe: delta must be >= 1");
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   auto pairs = associateByTimestamp(est, gt, maxDt);
   if (pairs.size() < static_cast<size_t>(delta) + 1)
     throw std::runtime_error("computeRpe: " + std::to_string(pairs.size()) +
@@ -60,7 +61,7 @@ TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta, 
       ratio.push_back(pe.scaleRatio);
     }
     else
-      pe.directionDeg = pe.scaleRatio = std::numeric_limits<double>::quiet_NaN();
+      pe.directionDeg = pe.scaleRatio = kNaN;
     tr.push_back(pe.translation);
     rot.push_back(pe.rotationDeg);
     r.errors.push_back(pe);
@@ -75,9 +76,8 @@ TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta, 
   r.rotationMedianDeg = median(rot);
   r.rotationMaxDeg = maxValue(rot);
   r.nDirections = dir.size();
-  r.directionMedianDeg = dir.empty() ? std::numeric_limits<double>::quiet_NaN() : median(dir);
-  r.directionRmseDeg = dir.empty() ? std::numeric_limits<double>::quiet_NaN() : rms(dir);
-  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  r.directionMedianDeg = dir.empty() ? kNaN : median(dir);
+  r.directionRmseDeg = dir.empty() ? kNaN : rms(dir);
   r.scaleRatioMedian = ratio.empty() ? kNaN : median(ratio);
   r.scaleRatioP10 = ratio.empty() ? kNaN : percentile(ratio, 10);
   r.scaleRatioP90 = ratio.empty() ? kNaN : percentile(ratio, 90);
