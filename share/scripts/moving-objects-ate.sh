@@ -18,7 +18,9 @@ SEEDS=("$@")
 [ ${#SEEDS[@]} -eq 0 ] && SEEDS=(7 11 23 42 101)
 mkdir -p "$OUT"
 ate() { "$BUILD/bin/imm-monoslam" "$1" "$2" --out "$3" --no-gui --quiet "${@:4}" | grep -o '= [0-9.]* % of path' | head -n 1 | tr -dc '0-9.'; }
-printf 'seed  full/no-objects  full/objects  ratio  imm7/objects  single/objects  full/still-boxes  refined/no-objects  refined/objects  imm7/disabled  full/disabled\n'
+COLUMNS_=(full/no-objects full/objects ratio imm7/objects single/objects full/still-boxes refined/no-objects
+          refined/objects imm7/disabled full/disabled)
+echo "seed  $(IFS=' '; echo "${COLUMNS_[*]}" | sed 's/ /  /g')"
 STILL=()
 for k in 1 2 3; do STILL+=(--set "object$k.amplitude=0" --set "object$k.spin_deg_s=[0 0 0]"); done
 ROWS=$(mktemp)
@@ -45,7 +47,7 @@ for s in "${SEEDS[@]}"; do
 done
 # Summary over the seeds: a 40-seed mean moves by 0.2-0.35 % of path with the seed set alone
 # (doc/shadow.md), so the medians, the failures and the per-seed ratios are given beside the means.
-awk '
+awk -v columns="${COLUMNS_[*]}" '
   function med(col,   n, i, j, t, v) {
     n = 0
     for (i = 1; i <= NR; i++) v[++n] = x[i, col]
@@ -56,7 +58,7 @@ awk '
     lr += log($3 / $2); if ($3 / $2 <= 1.2) ok++; rlr += log($9 / $8) }
   END {
     if (NR == 0) exit
-    split("full/no-objects full/objects ratio imm7/objects single/objects full/still-boxes refined/no-objects refined/objects imm7/disabled full/disabled", name, " ")
+    split(columns, name, " ")
     printf "\nover %d seeds: mean / median (runs > 2 %%)\n", NR
     for (c = 2; c <= 11; c++) if (c != 4) printf "  %-18s %.3f / %.3f (%d)\n", name[c - 1], sum[c] / NR, med(c), fail[c]
     printf "  full system, objects / no objects: %.2f x (means), %.2f x (medians), geometric mean of the ratios %.2f, <= 1.2 on %d seeds\n", \

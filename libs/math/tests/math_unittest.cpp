@@ -1,10 +1,13 @@
 /* Tests: quaternion Jacobians vs numerical, chi-square quantiles, log-likelihoods. */
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <gtest/gtest.h>
 #include <immslam/math/bearing.h>
 #include <immslam/math/chi2.h>
 #include <immslam/math/gaussian.h>
 #include <immslam/math/numerical_jacobian.h>
+#include <immslam/math/parallel.h>
 #include <immslam/math/quaternion.h>
 
 #include <random>
@@ -156,11 +159,6 @@ TEST(Bearing, AnglesRoundTripAndJacobians)
     EXPECT_LT((Jmn - Jm).norm(), 1e-8);
   }
 }
-
-#include <immslam/math/parallel.h>
-
-#include <algorithm>
-#include <atomic>
 
 TEST(ThreadPool, BackToBackJobsOfEverySizeAndUnevenCosts)
 {
