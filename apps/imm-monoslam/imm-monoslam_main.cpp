@@ -19,5 +19,8 @@ int main(int argc, char** argv)
   if (st >= 0) return st;
   g_app = &app;
   std::signal(SIGINT, onSigint);
-  return app.run();
+  const int rc = app.run();
+  std::signal(SIGINT, SIG_DFL);  // the handler must not outlive `app`
+  g_app = nullptr;
+  return rc;
 }

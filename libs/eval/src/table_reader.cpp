@@ -124,7 +124,8 @@ double CTableReader::number(std::size_t i, const std::string& column) const
 std::int64_t CTableReader::integer(std::size_t i, const std::string& column) const
 {
   std::int64_t v = 0;
-  const std::string& s = i < m_fields.size() ? m_fields[i] : std::string();
+  static const std::string kEmpty;
+  const std::string& s = i < m_fields.size() ? m_fields[i] : kEmpty;
   const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
   if (s.empty() || r.ec != std::errc() || r.ptr != s.data() + s.size())
     fail(column + ": '" + s + "' is not an integer");

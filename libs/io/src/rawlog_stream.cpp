@@ -287,7 +287,7 @@ CRawlogReader::EResult CRawlogReader::read(mrpt::serialization::CSerializable::P
   catch (const std::exception& e)
   {
     err = mrptMessage(e.what());
-    if (err.size() > 400) err = err.substr(0, 400) + "...";
+    if (err.size() > 400) err.replace(400, std::string::npos, "...");
   }
   if (!m_stream->implausible().empty())
     m_why = m_stream->implausible();

@@ -94,7 +94,7 @@ class CSectionReader
     if (!has(key)) return {};
     std::string v = m_cfg.read_string(m_section, key, "");
     const auto c = v.find_first_of("#;");
-    if (c != std::string::npos) v = v.substr(0, c);
+    if (c != std::string::npos) v.resize(c);
     return math::trim(v);
   }
 

@@ -125,7 +125,7 @@ std::string reasonOf(const std::string& what)
   const auto m = what.find("Message:");
   std::string s = m == std::string::npos ? what : what.substr(m + 8);
   const auto nl = s.find('\n');
-  if (nl != std::string::npos) s = s.substr(0, nl);
+  if (nl != std::string::npos) s.resize(nl);
   const auto b = s.find_first_not_of(" \t");
   return b == std::string::npos ? std::string("unknown error") : s.substr(b);
 }
