@@ -124,11 +124,10 @@ double CTableReader::number(std::size_t i, const std::string& column) const
 std::int64_t CTableReader::integer(std::size_t i, const std::string& column) const
 {
   std::int64_t v = 0;
-  static const std::string kEmpty;
-  const std::string& s = i < m_fields.size() ? m_fields[i] : kEmpty;
+  const std::string_view s = i < m_fields.size() ? std::string_view(m_fields[i]) : std::string_view();
   const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
   if (s.empty() || r.ec != std::errc() || r.ptr != s.data() + s.size())
-    fail(column + ": '" + s + "' is not an integer");
+    fail(column + ": '" + std::string(s) + "' is not an integer");
   return v;
 }
 
