@@ -1022,3 +1022,44 @@ TEST(RobustOutputs, OutputFolderThatIsAFileIsAnErrorNamingIt)
   EXPECT_EQ(r.status, 1);
   EXPECT_TRUE(contains(r.err, d + "/taken")) << r.err;
 }
+
+TEST(RobustKnownAssociation, BadFileKindsAndFramesWithoutTracks)
+{
+  // [input] known_association: the tracks of a caller's own front end (timestamp id kind x y z u v).
+  const std::string d = copyBase("known_association");
+  const auto lines = readRgb(d);
+  const std::string tracks = d + "/tracks.txt";
+  {
+    // Tracks for every frame but 10-14: a grid of points that stay put (a camera at rest).
+    std::ofstream o(tracks);
+    o << "# timestamp point_id kind x y z u v\n";
+    for (std::size_t i = 0; i < lines.size(); ++i)
+      if (i < 10 || i >= 15)
+        for (int k = 0; k < 30; ++k)
+          o << lines[i].stamp << " " << k << (k % 10 == 0 ? " moving" : " static") << " 0 0 0 " << 20 + 45 * (k % 6)
+            << " " << 20 + 45 * (k / 6) << "\n";
+  }
+  auto r = runApp({kSingle, d, "--out", d + "/out", "--set", "input.known_association=" + tracks});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.summary.framesProcessed, lines.size());
+  EXPECT_EQ(r.summary.framesWithoutTracks, 5u);
+  // Only the static tracks: runs too.
+  r = runApp({kSingle, d, "--out", d + "/out_static", "--set", "input.known_association=" + tracks, "--set",
+              "input.known_association_kinds=static"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  // A kind that is not one: an error naming the key.
+  r = runApp({kSingle, d, "--out", d + "/out_kind", "--set", "input.known_association=" + tracks, "--set",
+              "input.known_association_kinds=dynamic"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "known_association_kinds")) << r.err;
+  // A missing file and a malformed line: errors naming the key, the file and the line.
+  r = runApp({kSingle, d, "--out", d + "/out_missing", "--set", "input.known_association=" + d + "/nope.txt"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "[input] known_association")) << r.err;
+  EXPECT_TRUE(contains(r.err, d + "/nope.txt")) << r.err;
+  std::ofstream(tracks, std::ios::app) << lines[3].stamp << " 7 static 0 0 0 12 abc\n";
+  r = runApp({kSingle, d, "--out", d + "/out_bad", "--set", "input.known_association=" + tracks});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "tracks.txt:")) << r.err;
+  EXPECT_FALSE(fs::exists(d + "/out_bad/trajectory.txt"));
+}

@@ -52,6 +52,61 @@ TEST(ShadowSystem, MonoslammotSynth19ClassificationAgainstPointGroundTruth)
   EXPECT_LE(c.staticAsDynamicRate(), 0.05);
 }
 
+TEST(ShadowSystem, KnownAssociationReproducesFig5OnSynth19)
+{
+  // The paper's Fig. 5 experiment as published: a simulated world of static and moving points, "data
+  // association performed manually" ([input] known_association: synth19's own point tracks), (a) the
+  // classic filter with the dynamic points disabled, (b) the classic filter with them, (c) with the
+  // shadow filter. doc/shadow.md, "Fig. 5 with known data association".
+  if (!haveSharedData("monoslammot_synth19")) GTEST_SKIP() << "../shared/data/monoslammot_synth19 is absent";
+  const std::string data = sharedData("monoslammot_synth19");
+  const std::string points = data + "/points_groundtruth.txt";
+  const auto truth = eval::readPointsGroundTruth(points);
+  std::map<std::string, double> ate;
+  std::map<std::string, eval::TConfusionMatrix> conf;
+  for (const std::string cfg : {"single", "single-shadow", "imm7-shadow"})
+    for (const std::string kinds : {"static", "all"})
+    {
+      const std::string name = cfg + "-" + kinds;
+      const std::string out = outDir("known-association-" + name);
+      app::TRunSummary s;
+      // The paper's protocol: the classic filter uses every measurement given (no gate, no RANSAC),
+      // starts on static points only (Sec. II) and takes no unresolved feature (no release), so only
+      // the shadow filter's decisions stand between it and the moving points.
+      ASSERT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", data, "--out", out, "--set", "output.plots=false",
+                        "--set", "input.known_association=" + points, "--set", "input.known_association_kinds=" + kinds,
+                        "--set", "input.known_association_robust=false", "--set",
+                        "input.known_association_first_map=static", "--set", "system.starved_below=0"},
+                       &s),
+                0)
+          << name;
+      ASSERT_TRUE(s.ate) << name;
+      EXPECT_EQ(s.framesWithoutTracks, 0u) << name;
+      ate[name] = s.ate->rmseOverPath;
+      if (cfg != "single")
+        conf[name] = eval::classificationAgainstPoints(eval::readClassificationsCsv(out + "/classifications.csv"), truth, 3.0)
+                         .confusion;
+    }
+  for (const auto& [name, c] : conf)
+    std::printf("%s: ATE %.2f %% of path; moving->static %zu/%zu, static->dynamic %zu/%zu\n", name.c_str(),
+                100 * ate[name], c.dynamicAsStatic, c.trulyDynamic(), c.staticAsDynamic, c.trulyStatic());
+  std::printf("single: %.2f %% (a, static points) %.2f %% (b, all points)\n", 100 * ate["single-static"],
+              100 * ate["single-all"]);
+  // (b) fails: the moving points in the filter multiply its error.
+  EXPECT_GE(ate["single-all"], 3 * ate["single-static"]);
+  // (c), MonoSLAMBOT as published: the accuracy of the same system in a static world (the 1.2
+  // criterion). With the IMM bank, one sequence's ratio is noise (0.99-1.39 with and without
+  // releases; the 120 rendered seeds of doc/shadow.md measure it): both beat (a) by far.
+  EXPECT_LE(ate["single-shadow-all"], 1.2 * ate["single-shadow-static"]);
+  for (const std::string cfg : {"single-shadow", "imm7-shadow"})
+  {
+    EXPECT_LE(ate[cfg + "-all"], 0.75 * ate["single-static"]) << cfg;
+    const auto& c = conf[cfg + "-all"];
+    EXPECT_GE(c.trulyDynamic(), 30u) << cfg;
+    EXPECT_LE(c.movingAsStaticRate(), 0.01) << cfg;
+  }
+}
+
 TEST(ShadowSystem, RenderedMovingObjectsDoNotCorruptTheMap)
 {
   // Same camera path with and without moving objects (handheld.ini / handheld-moving.ini).

@@ -2,6 +2,8 @@
 #include <immslam/app/app_options.h>
 #include <immslam/core/config.h>
 
+#include <stdexcept>
+
 namespace immslam::app
 {
 void TInputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
@@ -12,6 +14,16 @@ void TInputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, c
   IMMSLAM_LOAD_STRING(rawlog_sensor_label);
   IMMSLAM_LOAD_INT(max_image_width);
   IMMSLAM_LOAD_STRING(exclusion_masks);
+  IMMSLAM_LOAD_STRING(known_association);
+  IMMSLAM_LOAD_STRING(known_association_kinds);
+  IMMSLAM_LOAD_BOOL(known_association_robust);
+  IMMSLAM_LOAD_STRING(known_association_first_map);
+  if (known_association_first_map != "all" && known_association_first_map != "static")
+    throw std::runtime_error("[" + s + "] known_association_first_map = '" + known_association_first_map +
+                             "': expected all or static");
+  if (known_association_kinds != "all" && known_association_kinds != "static" && known_association_kinds != "moving")
+    throw std::runtime_error("[" + s + "] known_association_kinds = '" + known_association_kinds +
+                             "': expected all, static or moving");
   core::requireNonNegative(max_image_width, s, "max_image_width");
   core::requirePositive(live_frame_rate_hz, s, "live_frame_rate_hz");
   if (source.empty()) throw std::runtime_error("[" + s + "] source: empty (use 'synthetic' or a path)");
@@ -25,6 +37,10 @@ void TInputOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std
   MRPT_SAVE_CONFIG_VAR_COMMENT(rawlog_sensor_label, "camera (sensorLabel) of a rawlog with several (empty: the first)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(max_image_width, "wider images are processed at 1/2, 1/4, ... size (0: never, the default)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(exclusion_masks, "folder with rgb.txt and masks/: per-frame masks of pixels with no new feature or SLAM match (empty: none)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(known_association, "file of point tracks 'timestamp id kind x y z u v': known data association instead of image search (empty: none)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(known_association_kinds, "tracks of known_association used: all | static | moving");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(known_association_first_map, "known_association: tracks that may start the first map: all | static (the paper's start)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(known_association_robust, "known_association: gate, 1-point RANSAC and delete as for images (false: use every match)");
 }
 
 void TOutputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)

@@ -28,6 +28,7 @@
 #include <fstream>
 #include <iomanip>
 #include <map>
+#include <set>
 #include <iostream>
 #include <limits>
 #include <sstream>
@@ -315,6 +316,34 @@ int CImmMonoSlamApp::runImpl()
     }
     logStr(mrpt::system::LVL_INFO, "excluded pixels: masks of " + dir + " (no new feature or SLAM match there)");
   }
+  // [input] known_association: the measured tracks of each frame, by timestamp (microseconds).
+  std::map<long long, std::vector<std::pair<std::int64_t, Vec2>>> knownTracks;
+  std::set<std::int64_t> movingTracks;  // kind moving (known_association_first_map = static)
+  const bool knownAssociation = !inOpts.known_association.empty();
+  if (knownAssociation)
+  {
+    const std::string file = resolvePath(inOpts.known_association, m_configDir);
+    std::vector<eval::TGroundTruthPoint> points;
+    try
+    {
+      points = eval::readPointsGroundTruth(file);
+    }
+    catch (const std::exception& e)
+    {
+      throw std::runtime_error("[input] known_association = " + file + ": " + e.what());
+    }
+    const std::string& kinds = inOpts.known_association_kinds;
+    std::size_t used = 0;
+    for (const auto& p : points)
+      if (kinds == "all" || (kinds == "moving") == p.moving)
+      {
+        knownTracks[std::llround(p.timestamp * 1e6)].emplace_back(p.pointId, p.uv);
+        if (p.moving) movingTracks.insert(p.pointId);
+        ++used;
+      }
+    logStr(mrpt::system::LVL_INFO, "known data association: " + std::to_string(used) + " measurements (" + kinds +
+                                       " tracks) of " + file + " instead of the image search");
+  }
   if (!cam)
   {
     cam = source->calibration();
@@ -477,7 +506,22 @@ int CImmMonoSlamApp::runImpl()
     const system::TSystemFrame* fr = nullptr;
     try
     {
-      fr = &sys->processFrame(frame.timestamp, frame.grey, excluded);
+      if (knownAssociation)
+      {
+        // The frame's tracks (within 0.1 ms of its timestamp), in the processed image's pixels.
+        std::vector<std::pair<std::int64_t, Vec2>> z;
+        const long long us = std::llround(frame.timestamp * 1e6);
+        for (auto it = knownTracks.lower_bound(us - 100); it != knownTracks.end() && it->first <= us + 100; ++it)
+          for (const auto& [id, uv] : it->second)
+            if (m_summary.framesProcessed > 0 || inOpts.known_association_first_map == "all" || !movingTracks.count(id))
+              z.emplace_back(id, reduction.factor > 1 ? Vec2(uv / reduction.factor) : uv);
+        if (z.empty() && m_summary.framesWithoutTracks++ == 0)
+          logStr(mrpt::system::LVL_WARN, "frame " + std::to_string(frame.index) + " (" + frame.origin +
+                                             "): no track of [input] known_association at its timestamp");
+        fr = &sys->processMeasurements(frame.timestamp, z, inOpts.known_association_robust);
+      }
+      else
+        fr = &sys->processFrame(frame.timestamp, frame.grey, excluded);
     }
     catch (const std::exception& e)
     {
@@ -539,6 +583,9 @@ int CImmMonoSlamApp::runImpl()
   if (m_summary.framesWithoutMask > 0)
     logStr(mrpt::system::LVL_WARN, "[input] exclusion_masks: " + std::to_string(m_summary.framesWithoutMask) +
                                        " frame(s) had no mask for their timestamp and excluded nothing");
+  if (m_summary.framesWithoutTracks > 0)
+    logStr(mrpt::system::LVL_WARN, "[input] known_association: " + std::to_string(m_summary.framesWithoutTracks) +
+                                       " frame(s) had no track at their timestamp (prediction only)");
   out.writeMap(sys->slam());
   m_summary.finalMapSize = static_cast<int>(sys->slam().features().size());
   if (!frameMs.empty())
@@ -567,6 +614,7 @@ int CImmMonoSlamApp::runImpl()
   s << std::fixed << std::setprecision(1) << "frames " << m_summary.framesProcessed << " processed";
   if (m_summary.framesSkipped) s << ", " << m_summary.framesSkipped << " skipped";
   if (m_summary.framesWithoutMask) s << ", " << m_summary.framesWithoutMask << " without exclusion mask";
+  if (m_summary.framesWithoutTracks) s << ", " << m_summary.framesWithoutTracks << " without known-association tracks";
   s << "; " << m_summary.fps << " fps (median " << std::setprecision(2) << m_summary.medianFrameMs << " ms/frame)"
     << "; map " << m_summary.finalMapSize << " features; median matched " << std::setprecision(0)
     << m_summary.medianMatched;

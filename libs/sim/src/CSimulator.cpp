@@ -1,5 +1,6 @@
 /* imm-monoslam — scenario rendering and dataset output (see CSimulator.h). */
 #include <immslam/io/CDatasetWriter.h>
+#include <immslam/math/quaternion.h>
 #include <immslam/sim/CRandom.h>
 #include <immslam/sim/CSimulator.h>
 
@@ -10,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <stdexcept>
 
 namespace immslam::sim
@@ -143,6 +145,92 @@ std::optional<TRayHit> CSimulator::raycast(const eval::TStampedPose& T_W_C, cons
   p.t = T_W_C.p_W_C;
   p.q = T_W_C.q_W_C.normalized();
   return m_renderer.raycast(m_world.boxesAt(ts - m_sc.start_time_s), p, uv);
+}
+
+std::size_t CSimulator::writePointTracks(const std::string& path, std::size_t n, const TPointTrackOptions& opts) const
+{
+  if (n == 0 || n > frameCount()) n = frameCount();
+  if (opts.staticPoints < 0 || opts.pointsPerObject < 0 || !(opts.noisePx >= 0) || !std::isfinite(opts.noisePx))
+    throw std::runtime_error("point tracks: counts must be >= 0 and the noise a finite number >= 0");
+  const auto& cam = *m_sc.camera;
+  CRandom rng(m_sc.seed * 0x9E3779B97F4A7C15ULL + 0x70696e7473ULL);  // its own stream of the scenario's seed
+  const auto poseOf = [this](std::size_t k, int object, TPose& T) {
+    for (const auto& o : objectPoses(k))
+      if (o.id == object)
+      {
+        T = o.T_W_O;
+        return true;
+      }
+    return false;
+  };
+  // The points: where random rays of random frames hit (static: world frame; moving: object frame).
+  struct TPoint
+  {
+    int object = 0;
+    Vec3 p = Vec3::Zero();
+  };
+  std::vector<TPoint> points;
+  const auto& objects = m_world.movingObjects();
+  std::map<int, int> wanted{{0, opts.staticPoints}}, have{{0, 0}};  // by object id (0: static world)
+  for (const auto& o : objects) wanted[o.id] = opts.pointsPerObject, have[o.id] = 0;
+  const int total = opts.staticPoints + opts.pointsPerObject * static_cast<int>(objects.size());
+  for (int attempt = 0; attempt < 200 * std::max(total, 1) && static_cast<int>(points.size()) < total; ++attempt)
+  {
+    const auto k = static_cast<std::size_t>(rng.uniformInt(0, static_cast<int>(n) - 1));
+    const Vec2 uv(rng.uniform(0, cam.width()), rng.uniform(0, cam.height()));
+    const auto hit = raycast(k, uv);
+    if (!hit || !wanted.count(hit->objectId)) continue;
+    const int j = hit->objectId;
+    if (have[j] >= wanted[j]) continue;
+    TPoint p;
+    p.object = j;
+    p.p = hit->p_W;
+    TPose T;
+    if (j > 0)
+    {
+      if (!poseOf(k, j, T)) continue;
+      p.p = math::quatRotate(math::quatConjugate(T.q), hit->p_W - T.t);
+    }
+    points.push_back(p);
+    ++have[j];
+  }
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("cannot write " + path);
+  f << "# point tracks rendered by imm-render from " << m_sc.origin << " (seed " << m_sc.seed << "): "
+    << have[0] << " static points, " << points.size() - have[0] << " on " << objects.size()
+    << " moving objects; projection noise " << opts.noisePx << " px\n"
+    << "# timestamp point_id kind x y z u v   (true world position, noisy projection)\n";
+  char line[256];
+  std::size_t rows = 0;
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    const auto T_W_C = cameraPose(k);
+    for (std::size_t i = 0; i < points.size(); ++i)
+    {
+      const TPoint& pt = points[i];
+      Vec3 p_W = pt.p;
+      TPose T;
+      if (pt.object > 0)
+      {
+        if (!poseOf(k, pt.object, T)) continue;
+        p_W = math::quatRotate(T.q, pt.p) + T.t;
+      }
+      const Vec3 p_C = math::quatRotate(math::quatConjugate(T_W_C.q_W_C), p_W - T_W_C.p_W_C);
+      Vec2 uv;
+      if (p_C.z() <= 0 || !cam.project(p_C, uv) || !cam.isInImage(uv)) continue;
+      // Occluded unless the ray through its projection hits this point first.
+      const auto hit = raycast(k, uv);
+      if (!hit || hit->objectId != pt.object || (hit->p_W - p_W).norm() > 1e-6 * std::max(1.0, hit->range)) continue;
+      const Vec2 z = uv + opts.noisePx * Vec2(rng.normal(), rng.normal());
+      if (!cam.isInImage(z)) continue;
+      std::snprintf(line, sizeof(line), "%.6f %zu %s %.6f %.6f %.6f %.4f %.4f\n", timestamp(k), i,
+                    pt.object == 0 ? "static" : "moving", p_W.x(), p_W.y(), p_W.z(), z.x(), z.y());
+      f << line;
+      ++rows;
+    }
+  }
+  if (!f) throw std::runtime_error("error writing " + path);
+  return rows;
 }
 
 TWriteStats CSimulator::writeDataset(const std::string& folder, std::size_t n,

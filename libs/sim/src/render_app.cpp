@@ -2,7 +2,10 @@
 #include <immslam/sim/CSimulator.h>
 #include <immslam/sim/render_app.h>
 
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <exception>
 #include <ostream>
 
@@ -19,6 +22,9 @@ std::string renderAppUsage()
          "  --frames N               write only the first N frames\n"
          "  --seed S                 override [scenario] seed\n"
          "  --set SECTION.KEY=VALUE  override one scenario key (repeatable)\n"
+         "  --points N[,M]           also points_groundtruth.txt: point tracks with known association, N on the\n"
+         "                           static world, M (default N/20, at least 4) on each moving object\n"
+         "  --point-noise PX         Gaussian noise of the point tracks' projections (default 0.5 px)\n"
          "  --help                   this text\n"
          "Exit status: 0 success, 1 bad input or failure, 2 bad usage.\n";
 }
@@ -28,6 +34,8 @@ int runRenderApp(const std::vector<std::string>& args, std::ostream& out, std::o
   std::vector<std::string> positional, overrides;
   long long frames = 0;
   std::string seedOverride;
+  std::optional<TPointTrackOptions> points;
+  double pointNoise = 0.5;
   const auto usageError = [&](const std::string& msg) {
     err << "imm-render: " << msg << "\n" << renderAppUsage();
     return 2;
@@ -61,6 +69,26 @@ int runRenderApp(const std::vector<std::string>& args, std::ostream& out, std::o
       frames = std::strtoll(v.c_str(), &end, 10);
       if (v.empty() || *end != '\0' || frames <= 0) return usageError("--frames needs a positive integer, got '" + v + "'");
     }
+    else if (a.rfind("--points", 0) == 0 && a.rfind("--point-noise", 0) != 0)
+    {
+      if (!value("--points", v)) return usageError("--points needs a value");
+      int nStatic = -1, nObject = -1;
+      char tail = 0;
+      const int got = std::sscanf(v.c_str(), "%d,%d%c", &nStatic, &nObject, &tail);
+      if (!((got == 1 && v.find(',') == std::string::npos) || got == 2) || nStatic < 0 || (got == 2 && nObject < 0))
+        return usageError("--points needs N or N,M (counts >= 0), got '" + v + "'");
+      points = TPointTrackOptions();
+      points->staticPoints = nStatic;
+      points->pointsPerObject = got == 2 ? nObject : std::max(4, nStatic / 20);
+    }
+    else if (a.rfind("--point-noise", 0) == 0)
+    {
+      if (!value("--point-noise", v)) return usageError("--point-noise needs a value");
+      char* end = nullptr;
+      pointNoise = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end != '\0' || !(pointNoise >= 0) || !std::isfinite(pointNoise))
+        return usageError("--point-noise needs a number >= 0 (px), got '" + v + "'");
+    }
     else if (a.rfind("--seed", 0) == 0)
     {
       if (!value("--seed", v)) return usageError("--seed needs a value");
@@ -93,12 +121,19 @@ int runRenderApp(const std::vector<std::string>& args, std::ostream& out, std::o
         n = static_cast<std::size_t>(frames);
     }
     const TWriteStats s = sim.writeDataset(positional[1], n);
+
     const auto& cam = *sim.camera();
     out << "imm-render: wrote " << s.frames << " frames (" << cam.width() << "x" << cam.height() << " "
         << cam.modelName() << ", " << sim.world().movingObjects().size() << " moving objects) to " << positional[1]
         << "\n"
         << "imm-render: " << (s.renderSeconds > 0 ? s.frames / s.renderSeconds : 0.0) << " frames/s rendering, "
         << (s.totalSeconds > 0 ? s.frames / s.totalSeconds : 0.0) << " frames/s including PNG writing\n";
+    if (points)
+    {
+      points->noisePx = pointNoise;
+      const std::size_t rows = sim.writePointTracks(positional[1] + "/points_groundtruth.txt", n, *points);
+      out << "imm-render: wrote " << rows << " point measurements to " << positional[1] << "/points_groundtruth.txt\n";
+    }
     return 0;
   }
   catch (const std::exception& e)

@@ -757,6 +757,109 @@ TEST(SimOutput, RenderAppCommandLine)
   EXPECT_EQ(runRenderApp({"/nonexistent/scenario.ini", dir.path.string()}, o3, e3), 1);
 }
 
+TEST(SimOutput, PointTracksAreTheVisibleProjectionsOfPointsOnTheirSurfaces)
+{
+  // CSimulator::writePointTracks (imm-render --points): the known-association input of Fig. 5.
+  const CSimulator& sim = shipped("handheld-moving");
+  TTempDir dir("points");
+  fs::create_directories(dir.path);
+  const std::size_t n = 60;
+  TPointTrackOptions o;
+  o.staticPoints = 150;
+  o.pointsPerObject = 10;
+  o.noisePx = 0;
+  const std::string exact = (dir.path / "exact.txt").string();
+  const std::size_t rows = sim.writePointTracks(exact, n, o);
+  struct TRow
+  {
+    double t;
+    long id;
+    std::string kind;
+    Vec3 p;
+    Vec2 uv;
+  };
+  const auto read = [](const std::string& path) {
+    std::vector<TRow> out;
+    for (const auto& l : dataLines(path))
+    {
+      std::istringstream is(l);
+      TRow r;
+      is >> r.t >> r.id >> r.kind >> r.p.x() >> r.p.y() >> r.p.z() >> r.uv.x() >> r.uv.y();
+      EXPECT_FALSE(is.fail()) << l;
+      out.push_back(r);
+    }
+    return out;
+  };
+  const auto tracks = read(exact);
+  ASSERT_EQ(tracks.size(), rows);
+  std::map<long, Vec3> inObjectFrame;  // a point keeps its place on its object (static: in the world)
+  std::map<std::size_t, cv::Mat> masks;
+  std::size_t agree = 0, moving = 0;
+  std::vector<std::size_t> perFrame(n, 0);
+  for (const auto& r : tracks)
+  {
+    const auto k = static_cast<std::size_t>(std::lround((r.t - sim.timestamp(0)) * sim.scenario().fps));
+    ASSERT_LT(k, n);
+    ASSERT_NEAR(sim.timestamp(k), r.t, 1e-6);
+    ++perFrame[k];
+    // (u, v) is the projection of (x, y, z) by the camera at its true pose (no noise asked).
+    const auto T = sim.cameraPose(k);
+    const Vec3 p_C = math::quatRotate(math::quatConjugate(T.q_W_C), r.p - T.p_W_C);
+    Vec2 uv;
+    ASSERT_TRUE(sim.camera()->project(p_C, uv));
+    EXPECT_NEAR((uv - r.uv).norm(), 0.0, 1e-3);
+    // The point is the first thing its ray hits (not occluded), on the right kind of surface.
+    const auto hit = sim.raycast(k, r.uv);
+    ASSERT_TRUE(hit.has_value());
+    EXPECT_EQ(hit->objectId != 0, r.kind == "moving");
+    EXPECT_NEAR((hit->p_W - r.p).norm(), 0.0, 1e-3 * hit->range);
+    Vec3 local = r.p;
+    if (r.kind == "moving")
+    {
+      ++moving;
+      const auto poses = sim.objectPoses(k);
+      const auto it = std::find_if(poses.begin(), poses.end(), [&](const TObjectPose& q) { return q.id == hit->objectId; });
+      ASSERT_NE(it, poses.end());
+      local = math::quatRotate(math::quatConjugate(it->T_W_O.q), r.p - it->T_W_O.t);
+    }
+    const auto [pos, fresh] = inObjectFrame.emplace(r.id, local);
+    if (!fresh) EXPECT_NEAR((pos->second - local).norm(), 0.0, 1e-5) << "point " << r.id;
+    // The renderer's mask says the same (away from silhouettes: almost everywhere).
+    if (!masks.count(k)) masks[k] = sim.renderMask(k);
+    const int u = std::clamp(static_cast<int>(std::lround(r.uv.x())), 0, masks[k].cols - 1);
+    const int v = std::clamp(static_cast<int>(std::lround(r.uv.y())), 0, masks[k].rows - 1);
+    agree += (masks[k].at<std::uint8_t>(v, u) != 0) == (r.kind == "moving") ? 1 : 0;
+  }
+  EXPECT_GE(agree, 0.98 * tracks.size());
+  EXPECT_GT(moving, 0u);
+  EXPECT_GE(*std::min_element(perFrame.begin(), perFrame.end()), 30u);
+  // With noise: the same points, each projection displaced by N(0, sigma^2) per coordinate.
+  o.noisePx = 0.5;
+  const std::string noisy = (dir.path / "noisy.txt").string();
+  const std::size_t noisyRows = sim.writePointTracks(noisy, n, o);
+  EXPECT_GE(noisyRows, 0.99 * rows);  // a few leave the image
+  EXPECT_LE(noisyRows, rows);
+  std::map<std::pair<long, long>, Vec2> exactAt;
+  for (const auto& r : tracks) exactAt[{std::lround(r.t * 1e6), r.id}] = r.uv;
+  const auto withNoise = read(noisy);
+  double ss = 0;
+  for (const auto& r : withNoise)
+  {
+    const auto it = exactAt.find({std::lround(r.t * 1e6), r.id});
+    ASSERT_NE(it, exactAt.end());
+    ss += (r.uv - it->second).squaredNorm();
+  }
+  EXPECT_NEAR(std::sqrt(ss / (2.0 * withNoise.size())), 0.5, 0.05);
+  // The command line.
+  std::ostringstream out, err;
+  const std::string sc = scenarioPath("handheld-moving");
+  EXPECT_EQ(runRenderApp({sc, (dir.path / "app").string(), "--frames", "5", "--points", "40,6"}, out, err), 0) << err.str();
+  EXPECT_TRUE(std::filesystem::exists(dir.path / "app" / "points_groundtruth.txt"));
+  EXPECT_EQ(runRenderApp({sc, (dir.path / "bad").string(), "--points", "x"}, out, err), 2);
+  EXPECT_EQ(runRenderApp({sc, (dir.path / "bad").string(), "--points", "10,-1"}, out, err), 2);
+  EXPECT_EQ(runRenderApp({sc, (dir.path / "bad").string(), "--point-noise", "-1"}, out, err), 2);
+}
+
 TEST(SimOutput, SyntheticSourceStreamsTheScenario)
 {
   CSyntheticSource src(scenarioPath("handheld-moving"), {}, 5);

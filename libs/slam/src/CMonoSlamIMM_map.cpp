@@ -1,6 +1,8 @@
 /* imm-monoslam — map management of the IMM SLAM bank: new features, deletion, ID -> XYZ
  * conversion (paper Sec. IV-2), and the per-frame driver. */
 #include <immslam/features/inverse_depth.h>
+#include <immslam/frontend/frontend.h>
+#include <immslam/math/chi2.h>
 #include <immslam/math/gaussian.h>
 #include <immslam/math/quaternion.h>
 #include <immslam/math/parallel.h>
@@ -53,13 +55,67 @@ void CMonoSlamIMM::endFrame(Clock::time_point t0)
   m_report.timeMs = msSince(t0);
 }
 
+void CMonoSlamIMM::gateMeasurements(const std::vector<std::pair<std::int64_t, Vec2>>& z, std::vector<TCandidate>& cands)
+{
+  // The active search with the matches given: every feature predicted in the image is searched, and
+  // its measurement is found if it lies in the feature's search ellipse (eqs. 13-14, fused).
+  std::unordered_map<std::int64_t, Vec2> measured;
+  for (const auto& [id, uv] : z)
+    if (uv.allFinite()) measured.emplace(id, uv);
+  const double gate = math::chi2Quantile(m_opts.search_probability, 2);
+  double areaSum = 0;
+  for (int k = 0; k < static_cast<int>(m_features.size()); ++k)
+  {
+    TFeature& f = m_features[k];
+    Vec2 h;
+    Mat2F Jf;
+    if (!predictMeasurement(*m_cam, m_xPred, f, h, &Jf) || !m_cam->isInImage(h)) continue;
+    const Mat2 S = innovationCovariance(predictedCovBlock(f.offset, f.dim()), Jf, m_sigmaPixel);
+    f.nPredicted++;
+    f.lastSeenFrame = m_frame;
+    areaSum += frontend::ellipseArea(S, gate);
+    ++m_report.nPredicted;
+    TSearchRecord rec;
+    rec.id = f.id;
+    rec.h = h;
+    rec.S = S;
+    const auto it = measured.find(f.id);
+    if (it != measured.end())
+    {
+      const Vec2 nu = it->second - h;
+      rec.found = nu.dot(S.ldlt().solve(nu)) <= gate;
+      rec.z = it->second;
+      rec.score = 1;
+    }
+    m_report.searches.push_back(rec);
+    if (rec.found) cands.push_back(TCandidate{k, rec.z, h, Jf, S});
+  }
+  m_report.meanSearchAreaPx2 = m_report.nPredicted ? areaSum / m_report.nPredicted : 0.0;
+  m_report.nFound = static_cast<int>(cands.size());
+}
+
 const TFrameReport& CMonoSlamIMM::processMeasurements(double timestamp,
-                                                       const std::vector<std::pair<std::int64_t, Vec2>>& z)
+                                                       const std::vector<std::pair<std::int64_t, Vec2>>& z, bool robust)
 {
   const auto t0 = Clock::now();
   beginFrame(timestamp);
   if (m_frame == 0)
     m_lastTimestamp = timestamp;
+  else if (robust)
+  {
+    m_report.dtFrames = frameDt(timestamp);
+    m_sinceTracked += m_report.dtFrames;
+    auto t = Clock::now();
+    predict(m_report.dtFrames);
+    m_report.tPredictMs = msSince(t);
+    m_report.lostFrames = m_lostFrames;
+    m_sawNoMap = false;
+    t = Clock::now();
+    std::vector<TCandidate> cands;
+    gateMeasurements(z, cands);
+    m_report.tSearchMs = msSince(t);
+    associateAndUpdate(cands);
+  }
   else
   {
     m_report.dtFrames = frameDt(timestamp);
@@ -93,6 +149,72 @@ const TFrameReport& CMonoSlamIMM::processMeasurements(double timestamp,
   }
   endFrame(t0);
   return m_report;
+}
+
+void CMonoSlamIMM::associateAndUpdate(std::vector<TCandidate>& cands)
+{
+  auto t = Clock::now();
+  const std::vector<int> low = m_ransac.lowInnovationInliers(
+      *m_cam, m_xPred, [this](int off, int len) { return predictedCovColumns(off, len); }, m_features, cands, m_rng,
+      &m_report.nHypotheses);
+  m_report.tRansacMs = msSince(t);
+
+  t = Clock::now();
+  const int r = m_imm->numModels();
+  VecX logLik = VecX::Zero(r);
+  updateBank(cands, low, logLik);
+  m_report.nLowInnovation = m_report.nMatched;
+  std::vector<char> used(cands.size(), 0);
+  for (int c : low) used[c] = 1;
+  // Weights for the rescue test: mu_{k|k-1} L^(1) normalized in log space.
+  m_rescueWeights = VecX::Ones(r);
+  if (r > 1)
+  {
+    VecX a(r);
+    for (int i = 0; i < r; ++i) a[i] = std::log(std::max(m_imm->predictedProbabilities()[i], 1e-300)) + logLik[i];
+    const double lse = math::logSumExp(a);
+    m_rescueWeights = std::isfinite(lse) ? VecX((a.array() - lse).exp()) : m_imm->predictedProbabilities();
+    // Dormant modes are still at their prediction: the rescue test uses the updated ones.
+    for (int i = 0; i < r; ++i)
+      if (m_dormant[i]) m_rescueWeights[i] = 0;
+    if (m_rescueWeights.sum() > 0) m_rescueWeights /= m_rescueWeights.sum();
+  }
+  const std::vector<int> high = rescue(cands, used);
+  updateBank(cands, high, logLik);
+  m_report.nRescued = m_report.nMatched - m_report.nLowInnovation;
+  if (r > 1) m_imm->updateProbabilities(logLik);
+  settleDormantModes();
+  m_report.nRejected = m_report.nFound - m_report.nMatched;
+  for (int c : low) used[c] = 1;
+  // Record the status of each search.
+  {
+    std::vector<char> isHigh(cands.size(), 0);
+    for (int c : high) isHigh[c] = 1;
+    std::unordered_map<std::int64_t, int> candOf;
+    for (int c = 0; c < static_cast<int>(cands.size()); ++c) candOf[m_features[cands[c].feature].id] = c;
+    for (auto& rec : m_report.searches)
+    {
+      if (!rec.found) continue;
+      const int c = candOf[rec.id];
+      rec.status = used[c] ? TSearchRecord::EStatus::LowInnovationInlier
+                           : isHigh[c] ? TSearchRecord::EStatus::RescuedInlier : TSearchRecord::EStatus::Rejected;
+      // Track record of outlier rejections (a feature that starts moving is rejected frame after frame).
+      TFeature& f = m_features[cands[c].feature];
+      f.rejectedInRow = rec.status == TSearchRecord::EStatus::Rejected ? f.rejectedInRow + 1 : 0;
+    }
+  }
+  m_report.tUpdateMs = msSince(t);
+
+  t = Clock::now();
+  refreshFused();
+  {
+    std::vector<int> inliers = low;
+    inliers.insert(inliers.end(), high.begin(), high.end());
+    estimateMeasurementNoise(cands, inliers);
+  }
+  updateLostState();
+  manageMap();
+  m_report.tMapMs = msSince(t);
 }
 
 const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& grey)
@@ -142,68 +264,7 @@ const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& 
     searchFeatures(grey, cands);
     m_report.tSearchMs = msSince(t);
 
-    t = Clock::now();
-    const std::vector<int> low = m_ransac.lowInnovationInliers(
-        *m_cam, m_xPred, [this](int off, int len) { return predictedCovColumns(off, len); }, m_features, cands, m_rng,
-        &m_report.nHypotheses);
-    m_report.tRansacMs = msSince(t);
-
-    t = Clock::now();
-    const int r = m_imm->numModels();
-    VecX logLik = VecX::Zero(r);
-    updateBank(cands, low, logLik);
-    m_report.nLowInnovation = m_report.nMatched;
-    std::vector<char> used(cands.size(), 0);
-    for (int c : low) used[c] = 1;
-    // Weights for the rescue test: mu_{k|k-1} L^(1) normalized in log space.
-    m_rescueWeights = VecX::Ones(r);
-    if (r > 1)
-    {
-      VecX a(r);
-      for (int i = 0; i < r; ++i) a[i] = std::log(std::max(m_imm->predictedProbabilities()[i], 1e-300)) + logLik[i];
-      const double lse = math::logSumExp(a);
-      m_rescueWeights = std::isfinite(lse) ? VecX((a.array() - lse).exp()) : m_imm->predictedProbabilities();
-      // Dormant modes are still at their prediction: the rescue test uses the updated ones.
-      for (int i = 0; i < r; ++i)
-        if (m_dormant[i]) m_rescueWeights[i] = 0;
-      if (m_rescueWeights.sum() > 0) m_rescueWeights /= m_rescueWeights.sum();
-    }
-    const std::vector<int> high = rescue(cands, used);
-    updateBank(cands, high, logLik);
-    m_report.nRescued = m_report.nMatched - m_report.nLowInnovation;
-    if (r > 1) m_imm->updateProbabilities(logLik);
-    settleDormantModes();
-    m_report.nRejected = m_report.nFound - m_report.nMatched;
-    for (int c : low) used[c] = 1;
-    // Record the status of each search.
-    {
-      std::vector<char> isHigh(cands.size(), 0);
-      for (int c : high) isHigh[c] = 1;
-      std::unordered_map<std::int64_t, int> candOf;
-      for (int c = 0; c < static_cast<int>(cands.size()); ++c) candOf[m_features[cands[c].feature].id] = c;
-      for (auto& rec : m_report.searches)
-      {
-        if (!rec.found) continue;
-        const int c = candOf[rec.id];
-        rec.status = used[c] ? TSearchRecord::EStatus::LowInnovationInlier
-                             : isHigh[c] ? TSearchRecord::EStatus::RescuedInlier : TSearchRecord::EStatus::Rejected;
-        // Track record of outlier rejections (a feature that starts moving is rejected frame after frame).
-        TFeature& f = m_features[cands[c].feature];
-        f.rejectedInRow = rec.status == TSearchRecord::EStatus::Rejected ? f.rejectedInRow + 1 : 0;
-      }
-    }
-    m_report.tUpdateMs = msSince(t);
-
-    t = Clock::now();
-    refreshFused();
-    {
-      std::vector<int> inliers = low;
-      inliers.insert(inliers.end(), high.begin(), high.end());
-      estimateMeasurementNoise(cands, inliers);
-    }
-    updateLostState();
-    manageMap();
-    m_report.tMapMs = msSince(t);
+    associateAndUpdate(cands);
   }
   endFrame(t0);
   return m_report;

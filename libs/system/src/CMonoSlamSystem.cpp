@@ -8,6 +8,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <unordered_set>
 
 namespace immslam::system
 {
@@ -102,6 +103,83 @@ shadow::TCameraMotion CMonoSlamSystem::cameraMotion(double timestamp, double dt)
   return m;
 }
 
+int CMonoSlamSystem::promoteFromShadow(const shadow::TShadowReport& srep, const cv::Mat& grey, bool holding,
+                                        int slamInView)
+{
+  // Promotions into SLAM keep their ids and the shadow's inverse-depth estimate as the prior.
+  std::vector<shadow::TPromotion> promotions = srep.promotions;
+  if (holding) promotions.clear();
+  // Without parallax nothing can be classified. While the IMM says the camera is not translating
+  // (stationary and rotation families dominate), the SLAM takes the unresolved features it needs,
+  // as the IMM paper's filter does with inverse depth; with translation, only when starving.
+  const int inView = slamInView + static_cast<int>(promotions.size());
+  double pGeneral = 0;
+  const VecX mu = m_slam->modelProbabilities();
+  for (int i = 0; i < mu.size(); ++i)
+    if (m_slam->models()[i].family == motion::EMotionFamily::General) pGeneral += mu[i];
+  const int need = pGeneral < 0.5 ? m_slam->options().min_visible_features : m_opts.starved_below;
+  if (!holding && m_opts.starved_below > 0 && inView < need)
+  {
+    const auto rel = m_shadow->releaseUnresolved(need - inView, m_opts.release_min_measured);
+    m_frame.released = static_cast<int>(rel.size());
+    promotions.insert(promotions.end(), rel.begin(), rel.end());
+  }
+  std::vector<Vec2> uv;
+  std::vector<std::pair<double, double>> prior;
+  std::vector<std::int64_t> ids;
+  for (const auto& p : promotions)
+  {
+    uv.push_back(p.uv);
+    prior.emplace_back(p.rho, p.sigmaRho);
+    ids.push_back(p.id);
+  }
+  m_frame.promoted = countAdded(m_slam->addFeaturesAt(grey, uv, prior, ids));
+  int pendingVisible = 0;
+  for (const auto& v : srep.views) pendingVisible += (v.cls == shadow::EShadowClass::Pending && v.searched) ? 1 : 0;
+  // Outcomes of the pending features that left the shadow filter this frame (pendingWeight()).
+  const int became = srep.nPromoted + m_frame.released;
+  m_becameSlam = kOutcomeDecay * m_becameSlam + became;
+  m_left = kOutcomeDecay * m_left + became + srep.nNewDynamic + srep.nLost + srep.nTimedOut;
+  return pendingVisible;
+}
+
+std::vector<std::pair<std::int64_t, std::int64_t>> CMonoSlamSystem::handOver(const slam::TFrameReport& rep,
+                                                                              const cv::Mat& grey)
+{
+  // SLAM features rejected frame after frame: handed back to the shadow filter at their pixel.
+  std::vector<std::pair<std::int64_t, std::int64_t>> moved;
+  if (m_opts.handover_rejections <= 0) return moved;
+  std::vector<std::int64_t> drop;
+  std::vector<Vec2> at;
+  for (const auto& s : rep.searches)
+    if (s.status == slam::TSearchRecord::EStatus::Rejected)
+      for (const auto& f : m_slam->features())
+        if (f.id == s.id && f.rejectedInRow >= m_opts.handover_rejections)
+        {
+          drop.push_back(f.id);
+          at.push_back(s.z);
+        }
+  if (drop.empty()) return moved;
+  m_slam->removeFeatures(drop);
+  const auto ids = m_shadow->addFeatures(grey, at);
+  m_frame.handedOver = static_cast<int>(drop.size());
+  for (std::size_t k = 0; k < drop.size(); ++k) moved.emplace_back(drop[k], ids[k]);
+  return moved;
+}
+
+int CMonoSlamSystem::newFeaturesWanted(int slamInView, int pendingVisible, bool holding, bool& firstMap) const
+{
+  // SLAM with nothing in view measures no camera motion: a new first map of [slam] initial_features,
+  // as at the first frame, straight in SLAM even with the shadow filter, which could only classify
+  // against a dead-reckoned camera (the IMM's stationary and rotation models keep the depths open).
+  const auto& so = m_slam->options();
+  firstMap = !holding && slamInView + m_frame.promoted == 0;
+  const int visible = slamInView + static_cast<int>(std::lround(pendingWeight() * pendingVisible));
+  return holding    ? 0
+         : firstMap ? so.initial_features
+                    : std::clamp(so.min_visible_features - visible, 0, so.max_new_features_per_frame);
+}
+
 const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Mat& grey, const cv::Mat& excluded)
 {
   const auto t0 = Clock::now();
@@ -119,77 +197,17 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
     std::vector<Vec2> avoid;
     if (m_shadow)
     {
-      // Shadow filter with the SLAM's camera motion; promotions into SLAM keep their ids and the
-      // shadow's inverse-depth estimate as the prior.
       const auto ts = Clock::now();
       const auto& srep = m_shadow->processFrame(cameraMotion(timestamp, rep.dtFrames), grey, excluded);
       m_frame.shadow = &srep;
-      std::vector<shadow::TPromotion> promotions = srep.promotions;
-      if (holding) promotions.clear();
-      // Without parallax nothing can be classified. While the IMM says the camera is not translating
-      // (stationary and rotation families dominate), the SLAM takes the unresolved features it needs,
-      // as the IMM paper's filter does with inverse depth; with translation, only when starving.
-      const int inView = slamInView + static_cast<int>(promotions.size());
-      double pGeneral = 0;
-      const VecX mu = m_slam->modelProbabilities();
-      for (int i = 0; i < mu.size(); ++i)
-        if (m_slam->models()[i].family == motion::EMotionFamily::General) pGeneral += mu[i];
-      const int need = pGeneral < 0.5 ? m_slam->options().min_visible_features : m_opts.starved_below;
-      if (!holding && m_opts.starved_below > 0 && inView < need)
-      {
-        const auto rel = m_shadow->releaseUnresolved(need - inView, m_opts.release_min_measured);
-        m_frame.released = static_cast<int>(rel.size());
-        promotions.insert(promotions.end(), rel.begin(), rel.end());
-      }
-      std::vector<Vec2> uv;
-      std::vector<std::pair<double, double>> prior;
-      std::vector<std::int64_t> ids;
-      for (const auto& p : promotions)
-      {
-        uv.push_back(p.uv);
-        prior.emplace_back(p.rho, p.sigmaRho);
-        ids.push_back(p.id);
-      }
-      const auto added = m_slam->addFeaturesAt(grey, uv, prior, ids);
-      m_frame.promoted = countAdded(added);
-      // SLAM features rejected frame after frame: handed back to the shadow filter at their pixel.
-      if (m_opts.handover_rejections > 0)
-      {
-        std::vector<std::int64_t> drop;
-        std::vector<Vec2> at;
-        for (const auto& s : rep.searches)
-          if (s.status == slam::TSearchRecord::EStatus::Rejected)
-            for (const auto& f : m_slam->features())
-              if (f.id == s.id && f.rejectedInRow >= m_opts.handover_rejections)
-              {
-                drop.push_back(f.id);
-                at.push_back(s.z);
-              }
-        if (!drop.empty())
-        {
-          m_slam->removeFeatures(drop);
-          m_shadow->addFeatures(grey, at);
-          m_frame.handedOver = static_cast<int>(drop.size());
-        }
-      }
-      for (const auto& v : srep.views) pendingVisible += (v.cls == shadow::EShadowClass::Pending && v.searched) ? 1 : 0;
-      // Outcomes of the pending features that left the shadow filter this frame (pendingWeight()).
-      const int became = srep.nPromoted + m_frame.released;
-      m_becameSlam = kOutcomeDecay * m_becameSlam + became;
-      m_left = kOutcomeDecay * m_left + became + srep.nNewDynamic + srep.nLost + srep.nTimedOut;
+      pendingVisible = promoteFromShadow(srep, grey, holding, slamInView);
+      handOver(rep, grey);
       avoid = m_shadow->occupiedPixels();
       m_frame.shadowMs = msSince(ts);
     }
     // Map management: new features where the image is empty of SLAM and shadow features.
-    const auto& so = m_slam->options();
-    // SLAM with nothing in view measures no camera motion: a new first map of [slam] initial_features,
-    // as at the first frame, straight in SLAM even with the shadow filter, which could only classify
-    // against a dead-reckoned camera (the IMM's stationary and rotation models keep the depths open).
-    const bool firstMap = !holding && slamInView + m_frame.promoted == 0;
-    const int visible = slamInView + static_cast<int>(std::lround(pendingWeight() * pendingVisible));
-    const int want = holding    ? 0
-                     : firstMap ? so.initial_features
-                                : std::clamp(so.min_visible_features - visible, 0, so.max_new_features_per_frame);
+    bool firstMap = false;
+    const int want = newFeaturesWanted(slamInView, pendingVisible, holding, firstMap);
     if (want > 0)
     {
       std::vector<Vec2> uv;
@@ -202,6 +220,95 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
         if (firstMap) m_frame.newFirstMap = countAdded(added);
       }
     }
+  }
+  m_prevR = m_slam->cameraPosition();
+  m_prevQ = m_slam->cameraOrientation();
+  m_frame.totalMs = msSince(t0);
+  return m_frame;
+}
+
+const TSystemFrame& CMonoSlamSystem::processMeasurements(double timestamp,
+                                                         const std::vector<std::pair<std::int64_t, Vec2>>& z,
+                                                         bool robust)
+{
+  const auto t0 = Clock::now();
+  m_frame = TSystemFrame();
+  // The filter holding each of the caller's tracks now (features leave both by deletion, drops, time-outs).
+  std::unordered_set<std::int64_t> inSlam, inShadow;
+  for (const auto& f : m_slam->features()) inSlam.insert(f.id);
+  if (m_shadow)
+    for (const auto& f : m_shadow->features()) inShadow.insert(f.id);
+  std::vector<std::pair<std::int64_t, Vec2>> zSlam, zShadow, fresh;
+  std::unordered_set<std::int64_t> seen;
+  for (const auto& [track, uv] : z)
+  {
+    if (!uv.allFinite() || !seen.insert(track).second) continue;  // one measurement per track and frame
+    const auto it = m_trackToFeature.find(track);
+    const std::int64_t id = it == m_trackToFeature.end() ? -1 : it->second;
+    if (id >= 0 && inSlam.count(id))
+      zSlam.emplace_back(id, uv);
+    else if (id >= 0 && inShadow.count(id))
+      zShadow.emplace_back(id, uv);
+    else if (m_slam->camera().isInImage(uv))
+      fresh.emplace_back(track, uv);
+  }
+  // The SLAM step of processFrame with these matches (gating, 1-point RANSAC, deletion), or every one used.
+  m_frame.slam = &m_slam->processMeasurements(timestamp, zSlam, robust);
+  const auto& rep = *m_frame.slam;
+  const int slamInView = m_slam->mapGivenUp() ? 0 : rep.nPredicted;
+  const bool holding = m_slam->relocalising();
+  std::vector<Vec2> avoid;
+  for (const auto& m : zSlam) avoid.push_back(m.second);
+  int pendingVisible = 0;
+  if (m_shadow && rep.frame > 0)
+  {
+    const auto ts = Clock::now();
+    const auto& srep = m_shadow->processMeasurements(cameraMotion(timestamp, rep.dtFrames), zShadow);
+    m_frame.shadow = &srep;
+    pendingVisible = promoteFromShadow(srep, cv::Mat(), holding, slamInView);
+    const auto moved = handOver(rep, cv::Mat());
+    if (!moved.empty())
+    {
+      std::unordered_map<std::int64_t, std::int64_t> newId(moved.begin(), moved.end());
+      for (auto& [track, id] : m_trackToFeature)
+        if (const auto it = newId.find(id); it != newId.end()) id = it->second;
+    }
+    for (const auto& m : zShadow) avoid.push_back(m.second);
+    m_frame.shadowMs = msSince(ts);
+  }
+  bool firstMap = false;
+  const int want = newFeaturesWanted(slamInView, pendingVisible, holding, firstMap);
+  if (want > 0 && !fresh.empty())
+  {
+    // The new tracks farthest from every feature held, one at a time (as corners in empty cells).
+    std::vector<double> gap(fresh.size(), std::numeric_limits<double>::infinity());
+    for (std::size_t k = 0; k < fresh.size(); ++k)
+      for (const auto& a : avoid) gap[k] = std::min(gap[k], (fresh[k].second - a).norm());
+    std::vector<std::int64_t> tracks;
+    std::vector<Vec2> uv;
+    while (static_cast<int>(uv.size()) < want)
+    {
+      const auto best = std::max_element(gap.begin(), gap.end()) - gap.begin();
+      if (gap[best] < 0) break;  // every new track taken
+      tracks.push_back(fresh[best].first);
+      uv.push_back(fresh[best].second);
+      gap[best] = -1;
+      for (std::size_t k = 0; k < fresh.size(); ++k)
+        if (gap[k] >= 0) gap[k] = std::min(gap[k], (fresh[k].second - uv.back()).norm());
+    }
+    std::vector<std::int64_t> ids;
+    if (m_shadow && !firstMap)
+    {
+      ids = m_shadow->addFeatures(cv::Mat(), uv);
+      m_frame.newShadow = countAdded(ids);
+    }
+    else
+    {
+      ids = m_slam->addFeaturesAt(cv::Mat(), uv);
+      if (firstMap) m_frame.newFirstMap = countAdded(ids);
+    }
+    for (std::size_t k = 0; k < ids.size(); ++k)
+      if (ids[k] >= 0) m_trackToFeature[tracks[k]] = ids[k];
   }
   m_prevR = m_slam->cameraPosition();
   m_prevQ = m_slam->cameraOrientation();

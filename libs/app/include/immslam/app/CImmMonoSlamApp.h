@@ -42,6 +42,7 @@ struct TRunSummary
 {
   std::size_t framesRead = 0, framesProcessed = 0, framesSkipped = 0;
   std::size_t framesWithoutMask = 0;     ///< processed with no mask of [input] exclusion_masks (nothing excluded)
+  std::size_t framesWithoutTracks = 0;   ///< processed with no measurement of [input] known_association
   std::vector<std::string> skipReasons;  ///< first few reasons
   std::string endReason;                 ///< "" for a normal end of input
   double wallSeconds = 0, fps = 0, medianFrameMs = 0, meanFrameMs = 0;

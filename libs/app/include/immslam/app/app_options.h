@@ -31,6 +31,24 @@ struct TInputOptions : public mrpt::config::CLoadableOptions
    * with that timestamp. Empty (default): none. With a rendered folder's truth this is the
    * MonoSLAMBOT paper's Fig. 5(a) baseline, the dynamic features disabled (doc/shadow.md). */
   std::string exclusion_masks;
+  /** A file of measured point tracks, `timestamp point_id kind x y z u v` per line (the format of
+   * monoslammot_synth19's points_groundtruth.txt; x y z are not used): known data association. The
+   * images are still read (timestamps, overlays) but the filters take these measurements instead of
+   * searching the images (CMonoSlamSystem::processMeasurements): the MonoSLAMBOT paper's Fig. 5
+   * experiment, "data association performed manually". Lines are matched to frames by timestamp
+   * (within 0.1 ms). Empty (default): the image front end. */
+  std::string known_association;
+  /** Which tracks of known_association are used: `all` (default), or the kind of its third column
+   * (`static`: the dynamic points disabled, Fig. 5(a)). */
+  std::string known_association_kinds = "all";
+  /** With known_association: true (default), SLAM treats the given matches as its active search
+   * would (a match outside its search ellipse is not found, 1-point RANSAC, deletion, handovers);
+   * false, it uses every one (the paper's classic MonoSLAM with manual association). */
+  bool known_association_robust = true;
+  /** With known_association: `all` (default) tracks may start the first map; `static`: only those of
+   * kind static, the paper's start (Sec. II: SLAM starts on static features "before perceiving
+   * dynamic features"); moving tracks in view then start later, in the shadow filter. */
+  std::string known_association_first_map = "all";
 
   void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
   void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;

@@ -41,6 +41,14 @@ struct TWriteStats
   double totalSeconds = 0;   ///< including PNG encoding and files
 };
 
+/** Options of CSimulator::writePointTracks(). */
+struct TPointTrackOptions
+{
+  int staticPoints = 200;     ///< points on the static world (room and static boxes)
+  int pointsPerObject = 12;   ///< points on each moving object
+  double noisePx = 0.5;       ///< standard deviation of the Gaussian noise of each projection (px)
+};
+
 /** The renderer of a scenario: builds the world and the camera path (checking that the camera
  * keeps `min_clearance` from walls, static boxes and moving objects), then renders any frame on
  * demand, deterministically (frame k depends only on the scenario and k). */
@@ -94,6 +102,18 @@ class CSimulator
    * objects_groundtruth.txt, masks/NNNNNN.png, world_boxes.txt and scenario.ini (the effective
    * scenario), each text file with '#' header comments.
    * \param progress called after each frame with the number of frames written. */
+  /** Writes point tracks with ground truth, for measurement-level experiments with known data
+   * association (the MonoSLAMBOT paper's Fig. 5: "data association was performed manually"): points
+   * on the textured surfaces, sampled where random rays of random frames hit them (static world, and
+   * each moving object in its own frame, moving with it), and for each of the first n frames (0: all)
+   * every point in view and not occluded (the ray through its projection hits it first), its
+   * projection plus Gaussian noise. Lines `timestamp point_id kind x y z u v`, kind `static` or
+   * `moving`, (x, y, z) the true world position then: the format of monoslammot_synth19's
+   * points_groundtruth.txt ([input] known_association, slam-eval classification --points, slam-eval
+   * tracks). Deterministic for a scenario (its seed). Returns the number of lines written.
+   * \throws std::runtime_error naming the file if it cannot be written. */
+  std::size_t writePointTracks(const std::string& path, std::size_t n = 0, const TPointTrackOptions& opts = {}) const;
+
   TWriteStats writeDataset(const std::string& folder, std::size_t n = 0,
                            const std::function<void(std::size_t)>& progress = {}) const;
 

@@ -244,8 +244,14 @@ class CMonoSlamIMM
    * IMM mixing and prediction, one update of every mode with all the given measurements (no active
    * search, no RANSAC), model probabilities, ID -> XYZ conversion. For measurement-level
    * simulations (consistency tests) and for callers with their own front end.
-   * \param z (feature id, measured pixel) pairs; unknown ids are ignored. */
-  const TFrameReport& processMeasurements(double timestamp, const std::vector<std::pair<std::int64_t, Vec2>>& z);
+   * \param z (feature id, measured pixel) pairs; unknown ids are ignored.
+   * \param robust false (default): every given measurement is used, no deletion (a measurement-level
+   * simulation, the consistency tests). true: the step of processFrame with the matches given instead
+   * of found in an image: a feature's measurement counts as found if it lies in its search ellipse
+   * (search_probability, fused, eqs. 13-14), then 1-point RANSAC, rescue, updates, adaptive pixel
+   * noise, the lost state and map management (deletion included) as for images; no relocalisation. */
+  const TFrameReport& processMeasurements(double timestamp, const std::vector<std::pair<std::int64_t, Vec2>>& z,
+                                          bool robust = false);
 
   /** Corners of the image in cells empty of current features (predicted positions; none when
    * mapGivenUp()), at most maxNew; `alsoOccupied` are extra positions to avoid (e.g. shadow-filter
@@ -325,6 +331,11 @@ class CMonoSlamIMM
   void initialiseState();
   void predict(double dt);
   void searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& cands);
+  /** searchFeatures() with the matches given (processMeasurements, robust). */
+  void gateMeasurements(const std::vector<std::pair<std::int64_t, Vec2>>& z, std::vector<TCandidate>& cands);
+  /** After the search: 1-point RANSAC, updates, rescue, probabilities, statuses, fused estimate,
+   * pixel noise, lost state, map management. */
+  void associateAndUpdate(std::vector<TCandidate>& cands);
   void updateBank(const std::vector<TCandidate>& cands, const std::vector<int>& which, VecX& logLik);
   /** The measurement of mode g for the candidates `use`: innovation nu and sparse Jacobian H. */
   void buildMeasurement(const bayes::TGaussian& g, const std::vector<TCandidate>& cands, const std::vector<int>& use,

@@ -17,6 +17,7 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <unordered_map>
 
 namespace immslam::system
 {
@@ -76,6 +77,26 @@ class CMonoSlamSystem
    * in this frame (CMonoSlamIMM::setExclusionMask; [input] exclusion_masks). */
   const TSystemFrame& processFrame(double timestamp, const cv::Mat& grey, const cv::Mat& excluded = cv::Mat());
 
+  /** The same step with known data association and no image: the caller's own front end, or a
+   * measurement-level simulation such as MonoSLAMBOT's Fig. 5 experiment ("data association was
+   * performed manually", Sec. IV). z holds (track id, measured pixel) with the caller's own track ids,
+   * at most one per track. A track the system holds is measured by the filter that holds it:
+   * - SLAM runs the step of processFrame with these matches (CMonoSlamIMM::processMeasurements,
+   *   robust): a measurement outside its feature's search ellipse is not found, then 1-point RANSAC,
+   *   updates, deletion; no relocalisation;
+   * - the shadow filter runs CShadowFilter::processMeasurements.
+   * Tracks the system does not hold are taken as the image step takes new corners: the first map of
+   * [slam] initial_features at the first frame (or whenever SLAM has nothing in view), then, while
+   * fewer than [slam] min_visible_features are in view, up to max_new_features_per_frame of them, those
+   * farthest from the features held, into the shadow filter (into SLAM when it is off). Promotions,
+   * releases and handovers are those of processFrame (a handed-over track keeps its track id with the
+   * shadow feature's new id). A track whose feature has left both filters (deleted, lost, timed out)
+   * may be taken again as a new feature, with a new id. The reports' feature ids are the system's own.
+   * \param robust false: SLAM uses every measurement given (no gate, no RANSAC, no deletion, hence no
+   * handover): the paper's classic MonoSLAM with manual data association. */
+  const TSystemFrame& processMeasurements(double timestamp, const std::vector<std::pair<std::int64_t, Vec2>>& z,
+                                          bool robust = true);
+
   const slam::CMonoSlamIMM& slam() const { return *m_slam; }
   slam::CMonoSlamIMM& slam() { return *m_slam; }
   /** The shadow filter, or null when off. */
@@ -95,6 +116,14 @@ class CMonoSlamSystem
 
  private:
   shadow::TCameraMotion cameraMotion(double timestamp, double dt) const;
+  /** Promotions and releases of the shadow filter's frame into SLAM, and the outcome counts of
+   * pendingWeight(); returns the pending features searched in the frame. */
+  int promoteFromShadow(const shadow::TShadowReport& srep, const cv::Mat& grey, bool holding, int slamInView);
+  /** SLAM features rejected in handover_rejections frames in a row move to the shadow filter (at
+   * their pixel in grey); returns the (SLAM id, new shadow id) pairs. */
+  std::vector<std::pair<std::int64_t, std::int64_t>> handOver(const slam::TFrameReport& rep, const cv::Mat& grey);
+  /** How many new features the frame wants; firstMap: they start a new first map straight in SLAM. */
+  int newFeaturesWanted(int slamInView, int pendingVisible, bool holding, bool& firstMap) const;
 
   TOptions m_opts;
   slam::CMonoSlamIMM::TOptions m_slamOpts;
@@ -106,6 +135,7 @@ class CMonoSlamSystem
   TSystemFrame m_frame;
   double m_pendingWeight = 1.0;        ///< fixed [system] pending_weight (< 0: auto)
   double m_becameSlam = 0, m_left = 0; ///< decayed counts of pending features that left the shadow filter
+  std::unordered_map<std::int64_t, std::int64_t> m_trackToFeature;  ///< processMeasurements: caller's track -> feature id
   Vec3 m_prevR = Vec3::Zero();
   Vec4 m_prevQ = Vec4(1, 0, 0, 0);
 };
