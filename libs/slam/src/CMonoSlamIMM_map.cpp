@@ -55,6 +55,17 @@ void CMonoSlamIMM::endFrame(Clock::time_point t0)
   m_report.timeMs = msSince(t0);
 }
 
+void CMonoSlamIMM::predictStep(double timestamp)
+{
+  m_report.dtFrames = frameDt(timestamp);
+  m_sinceTracked += m_report.dtFrames;
+  const auto t = Clock::now();
+  predict(m_report.dtFrames);
+  m_report.tPredictMs = msSince(t);
+  m_report.lostFrames = m_lostFrames;
+  m_sawNoMap = false;
+}
+
 void CMonoSlamIMM::gateMeasurements(const std::vector<std::pair<std::int64_t, Vec2>>& z, std::vector<TCandidate>& cands)
 {
   // The active search with the matches given: every feature predicted in the image is searched, and
@@ -103,14 +114,8 @@ const TFrameReport& CMonoSlamIMM::processMeasurements(double timestamp,
     m_lastTimestamp = timestamp;
   else if (robust)
   {
-    m_report.dtFrames = frameDt(timestamp);
-    m_sinceTracked += m_report.dtFrames;
-    auto t = Clock::now();
-    predict(m_report.dtFrames);
-    m_report.tPredictMs = msSince(t);
-    m_report.lostFrames = m_lostFrames;
-    m_sawNoMap = false;
-    t = Clock::now();
+    predictStep(timestamp);
+    const auto t = Clock::now();
     std::vector<TCandidate> cands;
     gateMeasurements(z, cands);
     m_report.tSearchMs = msSince(t);
@@ -241,25 +246,18 @@ const TFrameReport& CMonoSlamIMM::processFrame(double timestamp, const cv::Mat& 
   }
   else
   {
-    m_report.dtFrames = frameDt(timestamp);
-    m_sinceTracked += m_report.dtFrames;
-    auto t = Clock::now();
-    predict(m_report.dtFrames);
-    m_report.tPredictMs = msSince(t);
-
-    m_report.lostFrames = m_lostFrames;
-    m_sawNoMap = false;
+    predictStep(timestamp);
     // Lost in the previous frame, or a gap in the frames over which the motion models' prediction
     // cannot be trusted: look for the map in the whole image first.
     if (relocalising() || (m_opts.relocalise && m_opts.relocalise_after_gap > 0 &&
                            m_report.dtFrames > m_opts.relocalise_after_gap))
     {
-      t = Clock::now();
+      const auto t = Clock::now();
       m_report.relocalised = tryRelocalise(grey);
       m_report.tRelocMs = msSince(t);
     }
 
-    t = Clock::now();
+    const auto t = Clock::now();
     std::vector<TCandidate> cands;
     searchFeatures(grey, cands);
     m_report.tSearchMs = msSince(t);

@@ -331,6 +331,8 @@ class CMonoSlamIMM
   void initialiseState();
   void predict(double dt);
   void searchFeatures(const cv::Mat& grey, std::vector<TCandidate>& cands);
+  /** The start of a frame's step after the first: time since the last frame, IMM prediction. */
+  void predictStep(double timestamp);
   /** searchFeatures() with the matches given (processMeasurements, robust). */
   void gateMeasurements(const std::vector<std::pair<std::int64_t, Vec2>>& z, std::vector<TCandidate>& cands);
   /** After the search: 1-point RANSAC, updates, rescue, probabilities, statuses, fused estimate,
