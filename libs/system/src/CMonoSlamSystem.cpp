@@ -238,6 +238,9 @@ const TSystemFrame& CMonoSlamSystem::processMeasurements(double timestamp,
   for (const auto& f : m_slam->features()) inSlam.insert(f.id);
   if (m_shadow)
     for (const auto& f : m_shadow->features()) inShadow.insert(f.id);
+  // A track whose feature left both filters is a new track again: forget it (bounded memory).
+  for (auto it = m_trackToFeature.begin(); it != m_trackToFeature.end();)
+    it = inSlam.count(it->second) || inShadow.count(it->second) ? std::next(it) : m_trackToFeature.erase(it);
   std::vector<std::pair<std::int64_t, Vec2>> zSlam, zShadow, fresh;
   std::unordered_set<std::int64_t> seen;
   for (const auto& [track, uv] : z)
