@@ -89,6 +89,25 @@ struct TImageReduction
   }
 };
 
+/** [input] known_association: the measured point tracks, by frame time. */
+struct TKnownTracks
+{
+  std::map<long long, std::vector<std::pair<std::int64_t, Vec2>>> byTime;  ///< microseconds -> (track, pixel)
+  std::set<std::int64_t> moving;                                            ///< tracks of kind moving
+
+  /** The tracks of the frame at t (within 0.1 ms), in the pixels of the image reduced by `factor`;
+   * staticOnly: without the moving ones (a static first map). */
+  std::vector<std::pair<std::int64_t, Vec2>> at(double t, int factor, bool staticOnly) const
+  {
+    std::vector<std::pair<std::int64_t, Vec2>> z;
+    const long long us = std::llround(t * 1e6);
+    for (auto it = byTime.lower_bound(us - 100); it != byTime.end() && it->first <= us + 100; ++it)
+      for (const auto& [id, uv] : it->second)
+        if (!staticOnly || !moving.count(id)) z.emplace_back(id, factor > 1 ? Vec2(uv / factor) : uv);
+    return z;
+  }
+};
+
 /** [input] exclusion_masks: the mask of a frame (non-zero: excluded) at the processed image size, or
  * an empty image when the folder has none for the frame's timestamp.
  * \throws std::runtime_error naming the frame and the key for a mask of another size. */
@@ -317,8 +336,7 @@ int CImmMonoSlamApp::runImpl()
     logStr(mrpt::system::LVL_INFO, "excluded pixels: masks of " + dir + " (no new feature or SLAM match there)");
   }
   // [input] known_association: the measured tracks of each frame, by timestamp (microseconds).
-  std::map<long long, std::vector<std::pair<std::int64_t, Vec2>>> knownTracks;
-  std::set<std::int64_t> movingTracks;  // kind moving (known_association_first_map = static)
+  TKnownTracks knownTracks;
   const bool knownAssociation = !inOpts.known_association.empty();
   if (knownAssociation)
   {
@@ -337,8 +355,8 @@ int CImmMonoSlamApp::runImpl()
     for (const auto& p : points)
       if (kinds == "all" || (kinds == "moving") == p.moving)
       {
-        knownTracks[std::llround(p.timestamp * 1e6)].emplace_back(p.pointId, p.uv);
-        if (p.moving) movingTracks.insert(p.pointId);
+        knownTracks.byTime[std::llround(p.timestamp * 1e6)].emplace_back(p.pointId, p.uv);
+        if (p.moving) knownTracks.moving.insert(p.pointId);
         ++used;
       }
     logStr(mrpt::system::LVL_INFO, "known data association: " + std::to_string(used) + " measurements (" + kinds +
@@ -508,13 +526,8 @@ int CImmMonoSlamApp::runImpl()
     {
       if (knownAssociation)
       {
-        // The frame's tracks (within 0.1 ms of its timestamp), in the processed image's pixels.
-        std::vector<std::pair<std::int64_t, Vec2>> z;
-        const long long us = std::llround(frame.timestamp * 1e6);
-        for (auto it = knownTracks.lower_bound(us - 100); it != knownTracks.end() && it->first <= us + 100; ++it)
-          for (const auto& [id, uv] : it->second)
-            if (m_summary.framesProcessed > 0 || inOpts.known_association_first_map == "all" || !movingTracks.count(id))
-              z.emplace_back(id, reduction.factor > 1 ? Vec2(uv / reduction.factor) : uv);
+        const bool staticOnly = m_summary.framesProcessed == 0 && inOpts.known_association_first_map == "static";
+        const auto z = knownTracks.at(frame.timestamp, reduction.factor, staticOnly);
         if (z.empty() && m_summary.framesWithoutTracks++ == 0)
           logStr(mrpt::system::LVL_WARN, "frame " + std::to_string(frame.index) + " (" + frame.origin +
                                              "): no track of [input] known_association at its timestamp");

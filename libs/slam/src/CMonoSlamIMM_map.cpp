@@ -123,8 +123,7 @@ const TFrameReport& CMonoSlamIMM::processMeasurements(double timestamp,
   }
   else
   {
-    m_report.dtFrames = frameDt(timestamp);
-    predict(m_report.dtFrames);
+    predictStep(timestamp);
     std::unordered_map<std::int64_t, int> index;
     for (int k = 0; k < static_cast<int>(m_features.size()); ++k) index[m_features[k].id] = k;
     std::vector<TCandidate> cands;
