@@ -2,7 +2,7 @@
 # Installs the Debian 12 packages imm-monoslam needs (only those missing). Needs root for apt-get.
 set -euo pipefail
 PKGS=(
-  build-essential cmake pkg-config
+  build-essential cmake pkg-config ccache
   libmrpt-dev mrpt-apps          # MRPT 2.5 (libraries, SceneViewer3D, RawLogViewer)
   libopencv-dev libeigen3-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
