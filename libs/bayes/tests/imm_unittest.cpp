@@ -667,7 +667,7 @@ struct TAsymmetricExample
   std::vector<double> x = {0.0, 1.0, 3.0};
   std::vector<double> P = {1.0, 2.0, 0.5};
   // By hand: c_0 = 0.8*0.5 + 0.3*0.3 + 0*0.2 = 0.49; c_1 = 0.15*0.5 + 0.6*0.3 + 0.25*0.2 = 0.305;
-  // c_2 = 0.05*0.5 + 0.1*0.3 + 0.75*0.2 = 0.205 (sum 1). With p transposed: 0.455, 0.345, 0.2.
+  // c_2 = 0.05*0.5 + 0.1*0.3 + 0.75*0.2 = 0.205 (sum 1). With p transposed: 0.455, 0.35, 0.195.
   VecX c = (VecX(3) << 0.49, 0.305, 0.205).finished();
   // W(i, j) = mu_{i|j} = p_ij mu_i / c_j.
   MatX W = (MatX(3, 3) << 0.40 / 0.49, 0.075 / 0.305, 0.025 / 0.205,  //
