@@ -107,8 +107,9 @@ TEST(IMM, MatchesTextbookOnLinearToyProblemStepByStep)
   MatX H = MatX::Zero(2, 4);
   H(0, 0) = H(1, 1) = 1;
   const MatX R = MatX::Identity(2, 2) * 0.25;
+  // An asymmetric Markov matrix (rows sum to 1, columns do not): a transposed use of it fails.
   MatX pi(3, 3);
-  pi << 0.9, 0.05, 0.05, 0.05, 0.9, 0.05, 0.05, 0.05, 0.9;
+  pi << 0.9, 0.07, 0.03, 0.1, 0.85, 0.05, 0.02, 0.18, 0.8;
   const VecX mu0 = VecX::Constant(3, 1.0 / 3);
 
   CIMMEstimator imm(pi, mu0, 0.0);
@@ -217,24 +218,32 @@ TEST(IMM, MixingKeepsCovariancesSymmetricPositiveDefinite)
     for (int a = 0; a < n; ++a) x[a] = g(rng);
     imm.mode(i) = TGaussian{x, A * A.transpose() / n + 1e-3 * MatX::Identity(n, n)};
   }
-  // Reference mixing, dense.
+  // Reference mixing, dense, with the weights mu_{j|i} = pi_ji mu_j / c_i, c_i = sum_j pi_ji mu_j
+  // computed here (not the class's mixingWeights(), which is checked against them).
   std::vector<TGaussian> before;
   for (int i = 0; i < r; ++i) before.push_back(imm.mode(i));
+  MatX W(r, r);
+  for (int i = 0; i < r; ++i)
+  {
+    double c = 0;
+    for (int j = 0; j < r; ++j) c += pi(j, i) * mu[j];
+    for (int j = 0; j < r; ++j) W(j, i) = pi(j, i) * mu[j] / c;
+  }
   math::CThreadPool pool(2);
   imm.mix(&pool);
+  EXPECT_LT((imm.mixingWeights() - W).cwiseAbs().maxCoeff(), 1e-15);
   for (int i = 0; i < r; ++i)
   {
     const MatX& P = imm.mode(i).P;
     EXPECT_EQ(P, P.transpose());
     EXPECT_GT(Eigen::SelfAdjointEigenSolver<MatX>(P).eigenvalues().minCoeff(), 0.0);
     VecX xr = VecX::Zero(n);
-    for (int j = 0; j < r; ++j) xr += imm.mixingWeights()(j, i) * before[j].x;
+    for (int j = 0; j < r; ++j) xr += W(j, i) * before[j].x;
     MatX Pr = MatX::Zero(n, n);
-    for (int j = 0; j < r; ++j)
-      Pr += imm.mixingWeights()(j, i) * (before[j].P + (before[j].x - xr) * (before[j].x - xr).transpose());
+    for (int j = 0; j < r; ++j) Pr += W(j, i) * (before[j].P + (before[j].x - xr) * (before[j].x - xr).transpose());
     EXPECT_LT((imm.mode(i).x - xr).norm(), 1e-12);
     EXPECT_LT((P - Pr).norm(), 1e-10);
-    EXPECT_NEAR(imm.mixingWeights().col(i).sum(), 1.0, 1e-12);
+    EXPECT_NEAR(W.col(i).sum(), 1.0, 1e-12);
   }
   // The combined block equals the block of the full combination.
   VecX xf;
