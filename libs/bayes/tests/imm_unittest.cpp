@@ -107,8 +107,9 @@ TEST(IMM, MatchesTextbookOnLinearToyProblemStepByStep)
   MatX H = MatX::Zero(2, 4);
   H(0, 0) = H(1, 1) = 1;
   const MatX R = MatX::Identity(2, 2) * 0.25;
+  // An asymmetric Markov matrix (rows sum to 1, columns do not): a transposed use of it fails.
   MatX pi(3, 3);
-  pi << 0.9, 0.05, 0.05, 0.05, 0.9, 0.05, 0.05, 0.05, 0.9;
+  pi << 0.9, 0.07, 0.03, 0.1, 0.85, 0.05, 0.02, 0.18, 0.8;
   const VecX mu0 = VecX::Constant(3, 1.0 / 3);
 
   CIMMEstimator imm(pi, mu0, 0.0);
@@ -217,24 +218,32 @@ TEST(IMM, MixingKeepsCovariancesSymmetricPositiveDefinite)
     for (int a = 0; a < n; ++a) x[a] = g(rng);
     imm.mode(i) = TGaussian{x, A * A.transpose() / n + 1e-3 * MatX::Identity(n, n)};
   }
-  // Reference mixing, dense.
+  // Reference mixing, dense, with the weights mu_{j|i} = pi_ji mu_j / c_i, c_i = sum_j pi_ji mu_j
+  // computed here (not the class's mixingWeights(), which is checked against them).
   std::vector<TGaussian> before;
   for (int i = 0; i < r; ++i) before.push_back(imm.mode(i));
+  MatX W(r, r);
+  for (int i = 0; i < r; ++i)
+  {
+    double c = 0;
+    for (int j = 0; j < r; ++j) c += pi(j, i) * mu[j];
+    for (int j = 0; j < r; ++j) W(j, i) = pi(j, i) * mu[j] / c;
+  }
   math::CThreadPool pool(2);
   imm.mix(&pool);
+  EXPECT_LT((imm.mixingWeights() - W).cwiseAbs().maxCoeff(), 1e-15);
   for (int i = 0; i < r; ++i)
   {
     const MatX& P = imm.mode(i).P;
     EXPECT_EQ(P, P.transpose());
     EXPECT_GT(Eigen::SelfAdjointEigenSolver<MatX>(P).eigenvalues().minCoeff(), 0.0);
     VecX xr = VecX::Zero(n);
-    for (int j = 0; j < r; ++j) xr += imm.mixingWeights()(j, i) * before[j].x;
+    for (int j = 0; j < r; ++j) xr += W(j, i) * before[j].x;
     MatX Pr = MatX::Zero(n, n);
-    for (int j = 0; j < r; ++j)
-      Pr += imm.mixingWeights()(j, i) * (before[j].P + (before[j].x - xr) * (before[j].x - xr).transpose());
+    for (int j = 0; j < r; ++j) Pr += W(j, i) * (before[j].P + (before[j].x - xr) * (before[j].x - xr).transpose());
     EXPECT_LT((imm.mode(i).x - xr).norm(), 1e-12);
     EXPECT_LT((P - Pr).norm(), 1e-10);
-    EXPECT_NEAR(imm.mixingWeights().col(i).sum(), 1.0, 1e-12);
+    EXPECT_NEAR(W.col(i).sum(), 1.0, 1e-12);
   }
   // The combined block equals the block of the full combination.
   VecX xf;
@@ -642,4 +651,137 @@ TEST(IMM, MixingOverSeveralStepsUsesTheMatrixOfTheInterval)
   one.mix(nullptr, 1.0);
   EXPECT_TRUE(one.lastTransition() == pi);
   EXPECT_TRUE(one.predictedProbabilities() == VecX(pi.transpose() * mu));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Known answers with an asymmetric Markov matrix (issue 30): the numbers below are worked out by
+// hand from the textbook formulas (Bar-Shalom, Li & Kirubarajan, ch. 11; IMM paper Fig. 2, eq. 7)
+//   c_j = sum_i p_ij mu_i,   mu_{i|j} = p_ij mu_i / c_j,   xbar_j = sum_i mu_{i|j} x_i,
+//   Pbar_j = sum_i mu_{i|j} (P_i + (x_i - xbar_j)^2),        mu_j+ = c_j L_j / sum_l c_l L_l,
+// with p_ij = P(mode j now | mode i before) (row i sums to 1). The matrix is far from symmetric,
+// so using it transposed (p_ji for p_ij) gives other numbers, and the class's own mixingWeights()
+// is never the reference.
+// ---------------------------------------------------------------------------------------------
+
+namespace
+{
+/** The asymmetric 3-mode example: p (rows sum to 1; p_20 = 0), mu, scalar means and variances. */
+struct TAsymmetricExample
+{
+  MatX p = (MatX(3, 3) << 0.80, 0.15, 0.05,  //
+            0.30, 0.60, 0.10,                 //
+            0.00, 0.25, 0.75)
+               .finished();
+  VecX mu = (VecX(3) << 0.5, 0.3, 0.2).finished();
+  std::vector<double> x = {0.0, 1.0, 3.0};
+  std::vector<double> P = {1.0, 2.0, 0.5};
+  // By hand: c_0 = 0.8*0.5 + 0.3*0.3 + 0*0.2 = 0.49; c_1 = 0.15*0.5 + 0.6*0.3 + 0.25*0.2 = 0.305;
+  // c_2 = 0.05*0.5 + 0.1*0.3 + 0.75*0.2 = 0.205 (sum 1). With p transposed: 0.455, 0.35, 0.195.
+  VecX c = (VecX(3) << 0.49, 0.305, 0.205).finished();
+  // W(i, j) = mu_{i|j} = p_ij mu_i / c_j.
+  MatX W = (MatX(3, 3) << 0.40 / 0.49, 0.075 / 0.305, 0.025 / 0.205,  //
+            0.09 / 0.49, 0.18 / 0.305, 0.03 / 0.205,                   //
+            0.00 / 0.49, 0.05 / 0.305, 0.15 / 0.205)
+               .finished();
+
+  std::unique_ptr<CIMMEstimator> make() const
+  {
+    auto imm = std::make_unique<CIMMEstimator>(p, mu, 0.0);
+    for (int i = 0; i < 3; ++i) imm->mode(i) = TGaussian{VecX::Constant(1, x[i]), MatX::Constant(1, 1, P[i])};
+    return imm;
+  }
+};
+}  // namespace
+
+TEST(IMM, AsymmetricMarkovMatrixMixingByHand)
+{
+  const TAsymmetricExample ex;
+  // The hand-written weights are the formula's (guards against a typo above).
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) ASSERT_NEAR(ex.W(i, j), ex.p(i, j) * ex.mu[i] / ex.c[j], 1e-15);
+  ASSERT_NEAR(ex.c.sum(), 1.0, 1e-15);
+  const auto owner = ex.make();
+  CIMMEstimator& imm = *owner;
+  imm.mix();
+  // Predicted probabilities c_j (eq. 7).
+  EXPECT_NEAR(imm.predictedProbabilities()[0], 0.49, 1e-15);
+  EXPECT_NEAR(imm.predictedProbabilities()[1], 0.305, 1e-15);
+  EXPECT_NEAR(imm.predictedProbabilities()[2], 0.205, 1e-15);
+  EXPECT_LT((imm.mixingWeights() - ex.W).cwiseAbs().maxCoeff(), 1e-15);
+  // Mixed means and variances, e.g. xbar_0 = 0.09 / 0.49 * 1 = 0.18367..., worked out per mode.
+  for (int j = 0; j < 3; ++j)
+  {
+    double xbar = 0;
+    for (int i = 0; i < 3; ++i) xbar += ex.W(i, j) * ex.x[i];
+    double Pbar = 0;
+    for (int i = 0; i < 3; ++i) Pbar += ex.W(i, j) * (ex.P[i] + (ex.x[i] - xbar) * (ex.x[i] - xbar));
+    EXPECT_NEAR(imm.mode(j).x[0], xbar, 1e-14) << "mode " << j;
+    EXPECT_NEAR(imm.mode(j).P(0, 0), Pbar, 1e-14) << "mode " << j;
+  }
+  EXPECT_NEAR(imm.mode(0).x[0], 0.09 / 0.49, 1e-14);
+  EXPECT_NEAR(imm.mode(2).x[0], (0.03 * 1.0 + 0.15 * 3.0) / 0.205, 1e-14);
+  // Posterior with likelihoods L = (0.2, 0.5, 0.1): c .* L = (0.098, 0.1525, 0.0205), sum 0.271.
+  imm.updateProbabilities((VecX(3) << std::log(0.2), std::log(0.5), std::log(0.1)).finished());
+  EXPECT_NEAR(imm.probabilities()[0], 0.098 / 0.271, 1e-14);
+  EXPECT_NEAR(imm.probabilities()[1], 0.1525 / 0.271, 1e-14);
+  EXPECT_NEAR(imm.probabilities()[2], 0.0205 / 0.271, 1e-14);
+}
+
+TEST(IMM, AsymmetricMarkovMatrixOverTwoStepsByHand)
+{
+  // Two mixings without evidence (equal likelihoods): mu_2 = (p^T)^2 mu_0 written out.
+  // Step 1: c = (0.49, 0.305, 0.205). Step 2: c'_0 = 0.8*0.49 + 0.3*0.305 = 0.4835,
+  // c'_1 = 0.15*0.49 + 0.6*0.305 + 0.25*0.205 = 0.30775, c'_2 = 0.05*0.49 + 0.1*0.305 + 0.75*0.205 = 0.20875.
+  const TAsymmetricExample ex;
+  const auto owner = ex.make();
+  CIMMEstimator& imm = *owner;
+  imm.mix();
+  imm.updateProbabilities(VecX::Zero(3));
+  EXPECT_NEAR(imm.probabilities()[0], 0.49, 1e-15);
+  imm.mix();
+  EXPECT_NEAR(imm.predictedProbabilities()[0], 0.4835, 1e-15);
+  EXPECT_NEAR(imm.predictedProbabilities()[1], 0.30775, 1e-15);
+  EXPECT_NEAR(imm.predictedProbabilities()[2], 0.20875, 1e-15);
+}
+
+TEST(IMM, ProbabilityFloorKnownAnswer)
+{
+  // Floor f = 1e-3, 2 modes, p = [0.9 0.1; 0.2 0.8], mu = (0.5, 0.5): c = (0.55, 0.45). Log-likelihoods
+  // (0, -50): the unfloored posterior of mode 1 is 0.45 e^-50 / 0.55 ~ 1.6e-22; floored and
+  // renormalized: (1 - f, f) (the floor's mass taken from the mode above it). The next prediction then
+  // starts from the floor: c'_1 = 0.1 (1 - f) + 0.8 f = 0.1007 (0.0999... without the floor).
+  MatX p(2, 2);
+  p << 0.9, 0.1, 0.2, 0.8;
+  const double f = 1e-3;
+  CIMMEstimator imm(p, VecX::Constant(2, 0.5), f);
+  EXPECT_EQ(imm.probabilityFloor(), f);
+  imm.setAllModes(VecX::Zero(1), MatX::Identity(1, 1));
+  imm.mix();
+  EXPECT_NEAR(imm.predictedProbabilities()[1], 0.45, 1e-15);
+  imm.updateProbabilities(Eigen::Vector2d(0.0, -50.0));
+  EXPECT_NEAR(imm.probabilities()[1], f, 1e-15);
+  EXPECT_NEAR(imm.probabilities()[0], 1 - f, 1e-15);
+  imm.mix();
+  EXPECT_NEAR(imm.predictedProbabilities()[1], 0.1 * (1 - f) + 0.8 * f, 1e-15);
+  // Three modes, two hopeless: (1 - 2f, f, f).
+  MatX p3 = MatX::Constant(3, 3, 0.05);
+  p3.diagonal().setConstant(0.9);
+  CIMMEstimator imm3(p3, VecX::Constant(3, 1.0 / 3), f);
+  imm3.setAllModes(VecX::Zero(1), MatX::Identity(1, 1));
+  imm3.mix();
+  imm3.updateProbabilities(Eigen::Vector3d(0.0, -60.0, -80.0));
+  EXPECT_NEAR(imm3.probabilities()[0], 1 - 2 * f, 1e-15);
+  EXPECT_NEAR(imm3.probabilities()[1], f, 1e-15);
+  EXPECT_NEAR(imm3.probabilities()[2], f, 1e-15);
+  // The rule for the modes above the floor (CIMMEstimator::updateProbabilities): they keep their
+  // excess over f in proportion, scaled so that the sum is 1: mu_i = f + (a_i - f) (1 - r f) /
+  // sum_{a_l >= f} (a_l - f), a the unfloored posterior. L = (1, 1, e^-60) after the step above:
+  // c_0 = 0.9 (1 - 2f) + 0.05 * 2f, c_1 = 0.05 (1 - 2f) + 0.9 f + 0.05 f, a_{0,1} = c_{0,1} / (c_0 + c_1).
+  imm3.mix();
+  imm3.updateProbabilities(Eigen::Vector3d(0.0, 0.0, -60.0));
+  const double c0 = 0.9 * (1 - 2 * f) + 0.1 * f, c1 = 0.05 * (1 - 2 * f) + 0.95 * f;
+  const double a0 = c0 / (c0 + c1), a1 = c1 / (c0 + c1);
+  EXPECT_NEAR(imm3.probabilities()[2], f, 1e-15);
+  EXPECT_NEAR(imm3.probabilities()[0], f + (a0 - f) * (1 - 3 * f) / (a0 + a1 - 2 * f), 1e-14);
+  EXPECT_NEAR(imm3.probabilities()[1], f + (a1 - f) * (1 - 3 * f) / (a0 + a1 - 2 * f), 1e-14);
 }

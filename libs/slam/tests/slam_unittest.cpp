@@ -1,5 +1,7 @@
 /* Tests of the SLAM filter: measurement Jacobians through every camera model, structural state
- * operations, 1-point RANSAC, and consistency (NEES) on a measurement-level Monte Carlo simulation. */
+ * operations, relocalisation, and consistency (NEES) on a measurement-level Monte Carlo simulation.
+ * 1-point RANSAC and the high-innovation rescue are tested in ransac_unittest.cpp, deletion and
+ * ID -> XYZ conversion in map_management_unittest.cpp. */
 #include <gtest/gtest.h>
 #include <immslam/features/inverse_depth.h>
 #include <immslam/math/chi2.h>
@@ -459,8 +461,10 @@ std::vector<double> simulateRun(unsigned seed, int nFrames, const std::string& m
 
 namespace
 {
-/** Average (over runs) pose NEES per frame, and the fraction of frames inside the 95 % band. */
-double neesInsideFraction(const std::string& models, double rhoStd, double* meanNees)
+/** Average (over runs) pose NEES per frame, and the fraction of frames inside the 95 % band
+ * [lo, hi] of that average (also returned, optional). */
+double neesInsideFraction(const std::string& models, double rhoStd, double* meanNees, double* bandLo = nullptr,
+                          double* bandHi = nullptr)
 {
   const int runs = 25, frames = 100, dof = 6;
   std::vector<double> avg(frames, 0.0);
@@ -473,6 +477,8 @@ double neesInsideFraction(const std::string& models, double rhoStd, double* mean
   int inside = 0;
   for (double a : avg) inside += (a >= lo && a <= hi) ? 1 : 0;
   *meanNees = std::accumulate(avg.begin(), avg.end(), 0.0) / frames;
+  if (bandLo) *bandLo = lo;
+  if (bandHi) *bandHi = hi;
   std::printf("%s, sigma_rho %.2f: pose NEES band [%.2f, %.2f]; inside on %d %% of frames; mean NEES %.2f\n",
               models.c_str(), rhoStd, lo, hi, inside, *meanNees);
   return static_cast<double>(inside) / frames;
@@ -482,13 +488,28 @@ double neesInsideFraction(const std::string& models, double rhoStd, double* mean
 TEST(Consistency, CameraPoseNeesInsideChiSquareBand)
 {
   // 25 Monte Carlo runs x 100 frames, 40 points, 1 px noise, truth drawn from the filter's priors and
-  // motion model. With a depth prior of 5 % the EKF is consistent; with wider depth priors it grows
-  // optimistic (the first-order linearization of the bilinear depth x displacement terms; reported,
-  // see doc/estimator.md) — that figure is printed, not asserted.
-  double mean = 0;
-  EXPECT_GE(neesInsideFraction("general:0.1", 0.05, &mean), 0.8);
-  EXPECT_GE(neesInsideFraction("stationary rotation:0.1 general:0.1", 0.05, &mean), 0.8);
-  neesInsideFraction("general:0.1", 0.3, &mean);
+  // motion model (seeds 100-124). With a depth prior of 5 % the EKF is consistent: the run-averaged
+  // NEES is inside the 95 % chi-square band [4.72, 7.43] (6 dof, 25 runs) on >= 80 % of the frames
+  // (measured 96 % and 97 %) and its mean over the frames is inside the band from both sides
+  // (measured 6.42 and 6.41): an over-confident filter fails the upper edge, an over-cautious one the
+  // lower edge.
+  double mean = 0, lo = 0, hi = 0;
+  EXPECT_GE(neesInsideFraction("general:0.1", 0.05, &mean, &lo, &hi), 0.8);
+  EXPECT_GT(mean, lo);
+  EXPECT_LT(mean, hi);
+  EXPECT_GE(neesInsideFraction("stationary rotation:0.1 general:0.1", 0.05, &mean, &lo, &hi), 0.8);
+  EXPECT_GT(mean, lo);
+  EXPECT_LT(mean, hi);
+  // With the wider depth prior (30 %) the EKF is known to be optimistic (the first-order
+  // linearization of the bilinear depth x displacement terms, doc/estimator.md): measured mean NEES
+  // 12.13, inside the band on 4 % of the frames, so the chi-square band cannot be asserted here.
+  // Asserted from both sides around the measurement instead: 12.13 / 1.2 = 10.1 < mean < 12.13 x 1.2
+  // = 14.6 (a covariance grown or shrunk by a 20 % change of the filter fails). A change that makes
+  // this case consistent must move it into [lo, hi] and update these bounds to the band's.
+  neesInsideFraction("general:0.1", 0.3, &mean, &lo, &hi);
+  EXPECT_GT(mean, lo);
+  EXPECT_GT(mean, 10.1);
+  EXPECT_LT(mean, 14.6);
 }
 
 TEST(IMMSlam, IdenticalModelsGiveTheSingleFilter)
@@ -776,6 +797,7 @@ TEST(Relocalisation, RepeatedTextureGivesNoWrongPose)
 {
   // A wall of one 40-texel tile repeated: every template matches a corner of every tile equally well.
   // The ambiguity test drops such matches, so no pose comes from a shifted, self-consistent set.
+  // The truth: the camera is at T_C_W = (q1, t1); a pose, if one is given, must be that one.
   const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
   Mat3 K;
   K << 200, 0, 160, 0, 200, 120, 0, 0, 1;
@@ -786,12 +808,64 @@ TEST(Relocalisation, RepeatedTextureGivesNoWrongPose)
   ASSERT_GE(pts.size(), 20u);
   const Vec4 q1 = math::quatFromRotationVector(Vec3(0.0, 0.03, 0.0));
   const Vec3 t1(0.3, 0.05, 0.1);
-  const TRelocalisation res = relocalise(viewPlane(tex, K, math::quatToRotation(q1), t1), *cam, pts, TRelocaliseParams{});
-  std::printf("[ info     ] repeated texture: %d corners, %d unambiguous matches, %s\n", res.nCorners,
-              res.nCorrespondences, res.ok ? "relocalised" : "no relocalisation");
-  if (res.ok)
+  const cv::Mat img = viewPlane(tex, K, math::quatToRotation(q1), t1);
+  const TRelocalisation res = relocalise(img, *cam, pts, TRelocaliseParams{});
+  std::printf("[ info     ] repeated texture: %d map points, %d corners, %d unambiguous matches, %s\n",
+              static_cast<int>(pts.size()), res.nCorners, res.nCorrespondences, res.ok ? "relocalised" : "no relocalisation");
+  // Either no pose or the true one (never a wrong pose) ...
+  EXPECT_TRUE(!res.ok || (res.r_CW - t1).norm() < 0.05) << "wrong pose " << res.r_CW.transpose();
+  // ... and measured: no pose at all, because no match survives the ambiguity test (0 of the map's
+  // points are matched unambiguously among the corners of the image).
+  EXPECT_FALSE(res.ok);
+  EXPECT_EQ(res.nCorrespondences, 0);
+  // The check is what does it: without it (margin 0: only exact ties are ambiguous) all 48 map
+  // points are matched, to copies of their tile, and the PnP returns a wrong pose (measured: 12
+  // inliers, a camera centre off by ~1e11).
+  TRelocaliseParams noCheck;
+  noCheck.ambiguityMargin = 0.0;
+  EXPECT_GE(relocalise(img, *cam, pts, noCheck).nCorrespondences, 40);  // measured 48
+}
+
+TEST(Relocalisation, KidnappedCameraIsFoundWithBoundedPoseError)
+{
+  // The camera is carried off (kidnapped) to far views of the textured plane of
+  // FindsThePoseOfATexturedPlaneAndNothingElsewhere (0.6-0.9 units and 6-12 degrees from the view
+  // the map was made from). The relocaliser must find each pose, its camera centre and orientation
+  // within limits set at 1.2x the errors measured here (deterministic: OpenCV's RANSAC seed is fixed;
+  // texture seed 5). Measured (centre, angle): (0.0180, 0.0045 rad), (0.0225, 0.0077),
+  // (0.0237, 0.0056), (0.0135, 0.0053); 11-17 PnP inliers. A roll of 0.2 rad or more (templates are
+  // not rotated) gave no pose at all: such views are not part of this test.
+  const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
+  Mat3 K;
+  K << 200, 0, 160, 0, 200, 120, 0, 0, 1;
+  const cv::Mat tex = randomTexture(5);
+  const std::vector<TRelocPoint> pts = planeMap(tex, K, *cam);
+  ASSERT_GE(pts.size(), 30u);
+  struct TKidnap
   {
-    EXPECT_LT((res.r_CW - t1).norm(), 0.05);  // if a pose is given, it is the right one
+    Vec3 rotvec, t;  // T_C_W
+  };
+  const std::vector<TKidnap> views = {{Vec3(0.05, -0.12, 0.1), Vec3(-0.5, 0.3, 0.4)},
+                                      {Vec3(-0.08, 0.1, -0.05), Vec3(0.6, 0.2, -0.3)},
+                                      {Vec3(0.0, 0.2, 0.0), Vec3(0.8, 0.0, 0.3)},
+                                      {Vec3(0.1, 0.05, 0.0), Vec3(0.2, 0.5, -0.6)}};
+  const std::vector<double> maxPos = {0.0216, 0.0270, 0.0284, 0.0162};     // 1.2x measured
+  const std::vector<double> maxAng = {0.0054, 0.0093, 0.0068, 0.0064};     // 1.2x measured (rad)
+  for (std::size_t v = 0; v < views.size(); ++v)
+  {
+    const Vec4 q = math::quatFromRotationVector(views[v].rotvec);
+    const Mat3 R = math::quatToRotation(q);
+    const TRelocalisation res = relocalise(viewPlane(tex, K, R, views[v].t), *cam, pts, TRelocaliseParams{});
+    const Vec3 cTrue = -R.transpose() * views[v].t;
+    const Vec3 cEst = -math::quatToRotation(res.q_CW).transpose() * res.r_CW;
+    const double ePos = (cEst - cTrue).norm();
+    const double eAng = math::quatToRotationVector(math::quatMultiply(math::quatConjugate(q), res.q_CW)).norm();
+    std::printf("[ info     ] kidnap %zu: %s, %d matches, %zu inliers, centre error %.5f, angle error %.5f rad\n", v,
+                res.ok ? "relocalised" : "no relocalisation", res.nCorrespondences, res.inlierIds.size(), ePos, eAng);
+    ASSERT_TRUE(res.ok) << "kidnap " << v;
+    EXPECT_GE(res.inlierIds.size(), 10u) << "kidnap " << v;
+    EXPECT_LT(ePos, maxPos[v]) << "kidnap " << v;
+    EXPECT_LT(eAng, maxAng[v]) << "kidnap " << v;
   }
 }
 
