@@ -56,8 +56,6 @@ class CDatasetFolderSource : public CImageSource
   const std::string& folder() const { return m_folder; }
   /** Absolute-or-folder-relative path of an entry's image, as opened by next(). */
   std::string imagePath(const TDatasetEntry& e) const;
-  /** Restarts the stream at the first entry. */
-  void rewind() { m_cursor = 0; }
   /** Continues the stream at entry `index` (0-based rgb.txt entry; past the end: End). */
   void seek(std::size_t index) { m_cursor = index; }
 
