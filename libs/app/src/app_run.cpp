@@ -191,7 +191,7 @@ std::string formatSeconds(double s)
 /** [output] refine_trajectory: bundle adjustment of the run's own matches (the filter's trajectory as
  * the start), written to trajectory_refined.txt, with its ATE when the input has ground truth. */
 void refineTrajectory(const std::vector<eval::TSearchRow>& rows, const COutputFiles& out,
-                      const camera::CCameraModel& cam, const std::optional<eval::TTrajectory>& gt,
+                      const camera::CCameraModel& cam, const std::optional<core::TTrajectory>& gt,
                       TRunSummary& summary, mrpt::system::COutputLogger& log)
 {
   const auto t0 = std::chrono::steady_clock::now();
@@ -201,7 +201,7 @@ void refineTrajectory(const std::vector<eval::TSearchRow>& rows, const COutputFi
     const double before = eval::reprojectionStats(prob).rmsPx;
     const eval::TBundleResult r = eval::bundleAdjust(prob);
     const double after = eval::reprojectionStats(prob).rmsPx;
-    eval::writeTumTrajectory(prob.poses, out.path("trajectory_refined.txt"));
+    core::writeTumTrajectory(prob.poses, out.path("trajectory_refined.txt"));
     summary.refineSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::ostringstream m;
     m << std::fixed << std::setprecision(3) << "trajectory_refined.txt: " << prob.poses.size() << " poses, "
@@ -341,7 +341,7 @@ int CImmMonoSlamApp::runImpl()
   if (knownAssociation)
   {
     const std::string file = resolvePath(inOpts.known_association, m_configDir);
-    std::vector<eval::TGroundTruthPoint> points;
+    std::vector<core::TGroundTruthPoint> points;
     try
     {
       points = eval::readPointsGroundTruth(file);

@@ -23,7 +23,7 @@ struct TDatasetEntry
 };
 
 /** Reads a dataset folder: `rgb.txt` (`timestamp path` per line, `#` comments), optional
- * `calib.txt` (camera::loadCalibFile) and optional `groundtruth.txt` (TUM, eval::readTumTrajectory).
+ * `calib.txt` (camera::loadCalibFile) and optional `groundtruth.txt` (TUM, core::readTumTrajectory).
  *
  * rgb.txt, calib.txt and groundtruth.txt are parsed in the constructor; images are decoded lazily
  * by next() with `cv::imread(IMREAD_UNCHANGED)`:
@@ -45,7 +45,7 @@ class CDatasetFolderSource : public CImageSource
 
   ENextStatus next(TFrame& frame, std::string& why) override;
   camera::CCameraModel::Ptr calibration() const override { return m_calib; }
-  std::optional<eval::TTrajectory> groundTruth() const override { return m_gt; }
+  std::optional<core::TTrajectory> groundTruth() const override { return m_gt; }
   std::string describe() const override;
   /** Number of rgb.txt entries (malformed lines included: each gives one next() result). */
   std::size_t sizeHint() const override { return m_entries.size(); }
@@ -64,7 +64,7 @@ class CDatasetFolderSource : public CImageSource
   std::string m_rgbTxt;
   std::vector<TDatasetEntry> m_entries;
   camera::CCameraModel::Ptr m_calib;
-  std::optional<eval::TTrajectory> m_gt;
+  std::optional<core::TTrajectory> m_gt;
   std::size_t m_cursor = 0;
 };
 
