@@ -11,8 +11,8 @@ int main(int argc, char** argv)
   namespace eval = immslam::eval;
   eval::TSlamEvalTruthSources truth;
   // Tracks on a rendered sequence: the truth at each tracked pixel is ray cast through the
-  // renderer's world (libs/sim depends on eval, so it is plugged in here).
-  truth.renderedTrackTruth = [](const std::string& folder, const std::vector<eval::TTrackSample>& samples,
+  // renderer's world (eval does not depend on the renderer, so it is plugged in here).
+  truth.renderedTrackTruth = [](const std::string& folder, const std::vector<immslam::core::TTrackSample>& samples,
                                 double maxDt, std::string& report) {
     immslam::sim::TPixelTruthStats st;
     auto points = immslam::sim::truthAtPixelsOfRenderedFolder(folder, samples, maxDt, &st);

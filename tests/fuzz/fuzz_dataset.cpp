@@ -1,8 +1,8 @@
 /* Fuzz target: the dataset-folder parsers (rgb.txt: io::parseRgbTxt and io::CDatasetFolderSource;
- * groundtruth.txt: eval::readTumTrajectory; calib.txt through the folder source). */
+ * groundtruth.txt: core::readTumTrajectory; calib.txt through the folder source). */
 #include "fuzz_common.h"
 
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/io/CDatasetFolderSource.h>
 
 #include <opencv2/imgcodecs.hpp>
@@ -76,7 +76,7 @@ int fuzzDataset(const std::uint8_t* data, std::size_t size)
     writeFile(gt, parts[1]);
     try
     {
-      for (const auto& p : eval::readTumTrajectory(gt))
+      for (const auto& p : core::readTumTrajectory(gt))
         if (!std::isfinite(p.timestamp) || !p.p_W_C.allFinite() || !p.q_W_C.allFinite() ||
             std::abs(p.q_W_C.norm() - 1) > 1e-9)
           fail("readTumTrajectory: a pose that is not finite or not unit");

@@ -16,7 +16,7 @@ namespace immslam::fuzz
 int fuzzCalib(const std::uint8_t* data, std::size_t size);
 
 /** A dataset folder: the input split at lines "%%" into rgb.txt, groundtruth.txt and calib.txt;
- * io::parseRgbTxt, eval::readTumTrajectory, and io::CDatasetFolderSource drained on a temporary
+ * io::parseRgbTxt, core::readTumTrajectory, and io::CDatasetFolderSource drained on a temporary
  * folder (its rgb/ holds one valid 8x6 PNG, a.png, that entries may name). */
 int fuzzDataset(const std::uint8_t* data, std::size_t size);
 

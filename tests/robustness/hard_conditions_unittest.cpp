@@ -53,7 +53,7 @@ using TModifier = std::function<bool(std::size_t k, cv::Mat& grey, const cv::Mat
 /** Per-run figures. */
 struct TRun
 {
-  eval::TTrajectory est, gt;   ///< per processed frame
+  core::TTrajectory est, gt;   ///< per processed frame
   std::vector<std::size_t> k;  ///< rendered frame index of each processed frame
   std::vector<int> matched, predicted, nMap;
   std::vector<double> onObjects;  ///< fraction of the frame's matches lying on moving objects
@@ -151,9 +151,9 @@ TRun runSystem(const std::string& config, const TSequence& seq, const TModifier&
 }
 
 /** Sub-trajectory of the processed frames whose rendered index is in [k0, k1). */
-std::pair<eval::TTrajectory, eval::TTrajectory> slice(const TRun& run, std::size_t k0, std::size_t k1)
+std::pair<core::TTrajectory, core::TTrajectory> slice(const TRun& run, std::size_t k0, std::size_t k1)
 {
-  std::pair<eval::TTrajectory, eval::TTrajectory> out;
+  std::pair<core::TTrajectory, core::TTrajectory> out;
   for (std::size_t i = 0; i < run.k.size(); ++i)
     if (run.k[i] >= k0 && run.k[i] < k1)
     {
@@ -164,7 +164,7 @@ std::pair<eval::TTrajectory, eval::TTrajectory> slice(const TRun& run, std::size
 }
 
 /** RMS position error of est mapped by S against gt (pairs by index). */
-double rmseWith(const eval::TSim3& S, const eval::TTrajectory& est, const eval::TTrajectory& gt)
+double rmseWith(const eval::TSim3& S, const core::TTrajectory& est, const core::TTrajectory& gt)
 {
   double s2 = 0;
   for (std::size_t i = 0; i < est.size(); ++i) s2 += (S.transform(est[i].p_W_C) - gt[i].p_W_C).squaredNorm();

@@ -306,7 +306,7 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
   ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("monoslam_testseq"), "--out", outClean, "--set",
                     "output.plots=false"}),
             0);
-  const eval::TTrajectory ref = eval::readTumTrajectory(outClean + "/trajectory.txt");
+  const core::TTrajectory ref = core::readTumTrajectory(outClean + "/trajectory.txt");
   const std::vector<std::array<double, 3>> tsVariants{{0.45, 30, 60}, {0.44, 30, 60}, {0.46, 30, 60}, {0.45, 28, 60}, {0.45, 30, 56}};
   eval::TConfusionMatrix tsPooled;
   std::vector<double> deviations, deviationsNoShadow;
@@ -320,7 +320,7 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
     for (const bool shadow : {true, false})
     {
       const auto out = runOn(shadow ? "imm7-shadow" : "imm7", folder, shadow ? &tsPooled : nullptr, nullptr);
-      const eval::TTrajectory est = eval::readTumTrajectory(out + "/trajectory.txt");
+      const core::TTrajectory est = core::readTumTrajectory(out + "/trajectory.txt");
       EXPECT_EQ(est.size(), 1000u) << "variant " << i;
       (shadow ? deviations : deviationsNoShadow).push_back(eval::computeAte(est, ref).rmseOverPath);
     }
@@ -434,8 +434,8 @@ TRealVideoRun runRealVideo(const std::string& cfg, const std::string& folder)
   const auto out = outDir(std::filesystem::path(folder).filename().string() + "_" + cfg);
   EXPECT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", folder, "--out", out, "--set", "output.plots=false"}), 0);
   TRealVideoRun r;
-  r.rotationRmseDeg = eval::computeAte(eval::readTumTrajectory(out + "/trajectory.txt"),
-                                       eval::readTumTrajectory(folder + "/groundtruth.txt"), eval::EAlignment::None)
+  r.rotationRmseDeg = eval::computeAte(core::readTumTrajectory(out + "/trajectory.txt"),
+                                       core::readTumTrajectory(folder + "/groundtruth.txt"), eval::EAlignment::None)
                           .rotationRmseDeg;
   r.segmentation = eval::segmentationAccuracy(eval::readModelProbabilitiesCsv(out + "/model_probabilities.csv"),
                                               eval::readMotionLabels(folder + "/motion_labels.txt"))
@@ -521,7 +521,7 @@ TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)
   ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("monoslam_testseq"), "--out", outClean, "--set",
                     "output.plots=false"}),
             0);
-  const eval::TTrajectory ref = eval::readTumTrajectory(outClean + "/trajectory.txt");
+  const core::TTrajectory ref = core::readTumTrajectory(outClean + "/trajectory.txt");
   struct TVariant
   {
     std::size_t first, last, videoStart;
@@ -542,7 +542,7 @@ TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)
     {
       const auto out = outDir("realhand_ts" + std::to_string(v) + "_" + cfg);
       ASSERT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", folder, "--out", out, "--set", "output.plots=false"}), 0);
-      deviation[cfg].push_back(eval::computeAte(eval::readTumTrajectory(out + "/trajectory.txt"), ref).rmseOverPath);
+      deviation[cfg].push_back(eval::computeAte(core::readTumTrajectory(out + "/trajectory.txt"), ref).rmseOverPath);
       if (cfg == "imm7-shadow")
       {
         const auto c = eval::classificationAgainstMaskFolder(eval::readClassificationsCsv(out + "/classifications.csv"), folder, 1)

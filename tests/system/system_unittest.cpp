@@ -1,7 +1,7 @@
 /* End-to-end accuracy and behaviour of the application on rendered and real sequences. */
 #include "test_helpers.h"
 
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/camera/CCameraModel.h>
 #include <immslam/eval/ate.h>
 #include <immslam/eval/reprojection.h>
@@ -106,7 +106,7 @@ TEST(SystemRealData, MonoslamTestseqTrackedEndToEndWithoutKnownTarget)
 namespace
 {
 /** A bundle adjustment of a run's own measurements (searches.csv) started from `start`. */
-eval::TBundleProblem refinedFrom(const std::string& out, const eval::TTrajectory& start, const std::string& calib,
+eval::TBundleProblem refinedFrom(const std::string& out, const core::TTrajectory& start, const std::string& calib,
                                  eval::TReprojectionStats* before = nullptr)
 {
   const auto cam = camera::loadCalibFile(calib);
@@ -121,7 +121,7 @@ eval::TBundleProblem refinedFrom(const std::string& out, const eval::TTrajectory
 /** A run of CONFIG on a shared sequence with its searches logged, and the adjustment of its matches. */
 struct TRefinedRun
 {
-  eval::TTrajectory est;
+  core::TTrajectory est;
   eval::TBundleProblem ba;
 };
 TRefinedRun runAndRefine(const std::string& config, const std::string& data, const std::string& name)
@@ -131,7 +131,7 @@ TRefinedRun runAndRefine(const std::string& config, const std::string& data, con
                     "--set", "output.search_log=true"}),
             0);
   TRefinedRun r;
-  r.est = eval::readTumTrajectory(out + "/trajectory.txt");
+  r.est = core::readTumTrajectory(out + "/trajectory.txt");
   r.ba = refinedFrom(out, r.est, sharedData(data) + "/calib.txt");
   return r;
 }
@@ -151,8 +151,8 @@ TEST(SystemRealData, VispRbtGroundTruthDisagreesWithTheImagesAndTheEstimateAgree
   ASSERT_EQ(runApp({sourceDir() + "/ini/imm7.ini", sharedData("visp_rbt"), "--out", out, "--set", "output.plots=false",
                     "--set", "output.search_log=true"}),
             0);
-  const auto gt = eval::readTumTrajectory(sharedData("visp_rbt") + "/groundtruth.txt");
-  const auto est = eval::readTumTrajectory(out + "/trajectory.txt");
+  const auto gt = core::readTumTrajectory(sharedData("visp_rbt") + "/groundtruth.txt");
+  const auto est = core::readTumTrajectory(out + "/trajectory.txt");
   const std::string calib = sharedData("visp_rbt") + "/calib.txt";
   eval::TReprojectionStats gtStats, estStats;
   const auto fromGt = refinedFrom(out, gt, calib, &gtStats);
@@ -190,7 +190,7 @@ TEST(SystemRealData, ExactGroundTruthAndLongRealRunAgreeWithTheirMeasurements)
     const auto cam = camera::loadCalibFile(sharedData("monoslammot_synth19") + "/calib.txt");
     const auto st = eval::reprojectionStats(
         eval::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"),
-                                eval::readTumTrajectory(sharedData("monoslammot_synth19") + "/groundtruth.txt"), *cam,
+                                core::readTumTrajectory(sharedData("monoslammot_synth19") + "/groundtruth.txt"), *cam,
                                 1e-4, 8));
     std::printf("synth19: ground truth leaves %zu of %zu features above 2 px, RMS %.2f px\n", st.featuresAbove,
                 st.nFeatures, st.rmsPx);
@@ -237,7 +237,7 @@ TEST(SystemOutputs, RefinedTrajectoryOnlyWhenAsked)
   args.insert(args.end(), {"--out", refined, "--set", "output.refine_trajectory=true"});
   app::TRunSummary s;
   ASSERT_EQ(runApp(args, &s), 0);
-  const auto traj = eval::readTumTrajectory(refined + "/trajectory_refined.txt");
+  const auto traj = core::readTumTrajectory(refined + "/trajectory_refined.txt");
   EXPECT_GE(traj.size(), 110u);
   EXPECT_LE(traj.size(), 120u);
   ASSERT_TRUE(s.ate && s.ateRefined);
@@ -372,14 +372,14 @@ TEST(SystemRealData, MonoslamTestseqBlackoutIsRelocalisedOnTheSameMap)
   EXPECT_EQ(std::stoi(rows[1 + 460][col("relocalised")]), 1);
   EXPECT_GE(std::stoi(rows[1 + 460][col("reloc_inliers")]), 8);
   EXPECT_EQ(std::stoi(rows[1 + 459][col("lost_frames")]), 59);
-  const auto after = [&](const eval::TTrajectory& t) {
-    eval::TTrajectory o;
+  const auto after = [&](const core::TTrajectory& t) {
+    core::TTrajectory o;
     for (const auto& p : t)
       if (p.timestamp >= tAfter - 1e-6) o.push_back(p);
     return o;
   };
-  const auto a = eval::computeAte(after(eval::readTumTrajectory(dmg + "/trajectory.txt")),
-                                  after(eval::readTumTrajectory(ref + "/trajectory.txt")), eval::EAlignment::SE3);
+  const auto a = eval::computeAte(after(core::readTumTrajectory(dmg + "/trajectory.txt")),
+                                  after(core::readTumTrajectory(ref + "/trajectory.txt")), eval::EAlignment::SE3);
   std::printf("testseq blackout 400-459, imm7-shadow: after the blackout vs the undamaged run (SE3) %.4f = %.2f %% of "
               "extent\n",
               a.rmse, 100 * a.rmseOverExtent);

@@ -53,9 +53,9 @@ std::string COutputFiles::path(const std::string& name) const { return (fs::path
 void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSlamIMM& slam)
 {
   const auto& r = *fr.slam;
-  eval::TStampedPose pose{r.timestamp, slam.cameraPosition(), slam.cameraOrientation()};
+  core::TStampedPose pose{r.timestamp, slam.cameraPosition(), slam.cameraOrientation()};
   m_traj.push_back(pose);
-  m_trajFile << eval::formatTumLine(pose) << '\n';
+  m_trajFile << core::formatTumLine(pose) << '\n';
   m_trajFile.flush();
 
   const VecX mu = slam.modelProbabilities();

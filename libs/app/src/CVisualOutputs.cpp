@@ -31,13 +31,13 @@ CVisualOutputs::CVisualOutputs(const std::string& outDir, const TOutputOptions& 
 
 CVisualOutputs::~CVisualOutputs() = default;
 
-viz::TSceneContent CVisualOutputs::sceneContent(const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
+viz::TSceneContent CVisualOutputs::sceneContent(const slam::CMonoSlamIMM& slam, const core::TTrajectory& trajectory,
                                                 const std::string& title) const
 {
   viz::TSceneContent c;
   c.trajectory = trajectory;
   c.camera = std::shared_ptr<const camera::CCameraModel>(&slam.camera(), [](const camera::CCameraModel*) {});
-  c.currentCamera = eval::TStampedPose{0, slam.cameraPosition(), slam.cameraOrientation()};
+  c.currentCamera = core::TStampedPose{0, slam.cameraPosition(), slam.cameraOrientation()};
   c.title = title;
   for (const auto& f : slam.features())
   {
@@ -68,7 +68,7 @@ viz::TSceneContent CVisualOutputs::sceneContent(const slam::CMonoSlamIMM& slam, 
 }
 
 void CVisualOutputs::onFrame(std::size_t frameIndex, const cv::Mat& image, const system::TSystemFrame& fr,
-                             const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
+                             const slam::CMonoSlamIMM& slam, const core::TTrajectory& trajectory,
                              const std::vector<std::string>& extraText)
 {
   const auto& r = slam.lastReport();
@@ -142,8 +142,8 @@ void CVisualOutputs::onFrame(std::size_t frameIndex, const cv::Mat& image, const
   }
 }
 
-void CVisualOutputs::finish(const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
-                            const std::optional<eval::TTrajectory>& groundTruth,
+void CVisualOutputs::finish(const slam::CMonoSlamIMM& slam, const core::TTrajectory& trajectory,
+                            const std::optional<core::TTrajectory>& groundTruth,
                             const std::optional<eval::TAteResult>& ate, const std::vector<std::string>& labels,
                             std::vector<std::string>& warnings)
 {

@@ -12,7 +12,7 @@ namespace immslam::eval
 namespace
 {
 /** Indices of the poses with finite timestamps, sorted by timestamp (then index). */
-std::vector<size_t> sortedFinite(const TTrajectory& t)
+std::vector<size_t> sortedFinite(const core::TTrajectory& t)
 {
   std::vector<size_t> idx;
   idx.reserve(t.size());
@@ -32,7 +32,7 @@ struct TCandidate
 
 /** For every pose of `from`, its predecessor and successor in `to` (sorted indices) within maxDt. */
 template <typename Emit>
-void neighbours(const TTrajectory& from, const std::vector<size_t>& fromIdx, const TTrajectory& to,
+void neighbours(const core::TTrajectory& from, const std::vector<size_t>& fromIdx, const core::TTrajectory& to,
                 const std::vector<size_t>& toIdx, double maxDt, Emit&& emit)
 {
   std::vector<double> toT(toIdx.size());
@@ -51,7 +51,7 @@ void neighbours(const TTrajectory& from, const std::vector<size_t>& fromIdx, con
 }
 }  // namespace
 
-std::vector<std::pair<size_t, size_t>> associateByTimestamp(const TTrajectory& a, const TTrajectory& b,
+std::vector<std::pair<size_t, size_t>> associateByTimestamp(const core::TTrajectory& a, const core::TTrajectory& b,
                                                             double maxDt)
 {
   if (!(maxDt >= 0)) throw std::invalid_argument("associateByTimestamp: maxDt must be >= 0");

@@ -31,7 +31,7 @@ double ratio(double num, double den)
   return num > 0 ? std::numeric_limits<double>::infinity() : 0.0;
 }
 
-std::string timeRange(const TTrajectory& t)
+std::string timeRange(const core::TTrajectory& t)
 {
   if (t.empty()) return "no poses";
   double lo = t.front().timestamp, hi = lo;
@@ -47,10 +47,10 @@ std::string timeRange(const TTrajectory& t)
 }
 }  // namespace
 
-TTrajectory applySim3(const TSim3& S, const TTrajectory& traj)
+core::TTrajectory applySim3(const TSim3& S, const core::TTrajectory& traj)
 {
   const Vec4 qR = rotationToQuat(S.R);
-  TTrajectory out = traj;
+  core::TTrajectory out = traj;
   for (auto& p : out)
   {
     p.p_W_C = S.transform(p.p_W_C);
@@ -59,7 +59,7 @@ TTrajectory applySim3(const TSim3& S, const TTrajectory& traj)
   return out;
 }
 
-TSim3 alignTrajectories(const TTrajectory& est, const TTrajectory& gt,
+TSim3 alignTrajectories(const core::TTrajectory& est, const core::TTrajectory& gt,
                         const std::vector<std::pair<size_t, size_t>>& pairs, EAlignment a, int* rank)
 {
   if (a == EAlignment::None)
@@ -78,7 +78,7 @@ TSim3 alignTrajectories(const TTrajectory& est, const TTrajectory& gt,
   return alignUmeyama(src, dst, a == EAlignment::Sim3, rank);
 }
 
-TAteResult computeAte(const TTrajectory& est, const TTrajectory& gt, EAlignment a, double maxDt)
+TAteResult computeAte(const core::TTrajectory& est, const core::TTrajectory& gt, EAlignment a, double maxDt)
 {
   const auto pairs = associateByTimestamp(est, gt, maxDt);
   if (pairs.empty())
@@ -140,7 +140,7 @@ TAteResult computeAte(const TTrajectory& est, const TTrajectory& gt, EAlignment 
   return r;
 }
 
-std::vector<TAtePairError> ateOverTime(const TTrajectory& est, const TTrajectory& gt, EAlignment a,
+std::vector<TAtePairError> ateOverTime(const core::TTrajectory& est, const core::TTrajectory& gt, EAlignment a,
                                        double maxDt)
 {
   return computeAte(est, gt, a, maxDt).errors;

@@ -148,14 +148,14 @@ TClassificationResult classificationAgainstMaskFolder(const std::vector<TClassif
   return classificationAgainstMasks(decisions, maskFolderProvider(datasetFolder, maxDt), radius);
 }
 
-std::vector<TGroundTruthPoint> readPointsGroundTruth(const std::string& path)
+std::vector<core::TGroundTruthPoint> readPointsGroundTruth(const std::string& path)
 {
   detail::CTableReader r(path, detail::CTableReader::ESeparator::Whitespace, "ground-truth points file");
-  std::vector<TGroundTruthPoint> out;
+  std::vector<core::TGroundTruthPoint> out;
   while (r.next())
   {
     r.requireFields(8, "timestamp point_id kind x y z u v");
-    TGroundTruthPoint p;
+    core::TGroundTruthPoint p;
     p.timestamp = r.number(0, "timestamp");
     p.pointId = r.integer(1, "point_id");
     const std::string& kind = r.fields()[2];
@@ -176,7 +176,7 @@ namespace
 class CPointsByFrame
 {
  public:
-  explicit CPointsByFrame(const std::vector<TGroundTruthPoint>& points) : m_points(points), m_order(points.size())
+  explicit CPointsByFrame(const std::vector<core::TGroundTruthPoint>& points) : m_points(points), m_order(points.size())
   {
     // Sorted by time (stable: file order within a frame), with the distinct frame times.
     std::iota(m_order.begin(), m_order.end(), std::size_t{0});
@@ -190,22 +190,22 @@ class CPointsByFrame
 
   /** The point of the frame within maxDt of t whose projection is nearest to uv, if at most
    * radiusPx away; null otherwise. */
-  const TGroundTruthPoint* nearest(double t, const Vec2& uv, double radiusPx, double maxDt) const
+  const core::TGroundTruthPoint* nearest(double t, const Vec2& uv, double radiusPx, double maxDt) const
   {
     const std::ptrdiff_t f = detail::nearestTime(m_times, t, maxDt);
     if (f < 0) return nullptr;
     double best = std::numeric_limits<double>::infinity();
-    const TGroundTruthPoint* found = nullptr;
+    const core::TGroundTruthPoint* found = nullptr;
     for (std::size_t i = m_start[static_cast<std::size_t>(f)]; i < m_start[static_cast<std::size_t>(f) + 1]; ++i)
     {
-      const TGroundTruthPoint& p = m_points[m_order[i]];
+      const core::TGroundTruthPoint& p = m_points[m_order[i]];
       if (const double dist = std::hypot(p.uv.x() - uv.x(), p.uv.y() - uv.y()); dist < best) best = dist, found = &p;
     }
     return best <= radiusPx ? found : nullptr;
   }
 
  private:
-  const std::vector<TGroundTruthPoint>& m_points;
+  const std::vector<core::TGroundTruthPoint>& m_points;
   std::vector<std::size_t> m_order;
   std::vector<double> m_times;
   std::vector<std::size_t> m_start;  // index into m_order of each frame's first point, + end
@@ -213,22 +213,22 @@ class CPointsByFrame
 }  // namespace
 
 TClassificationResult classificationAgainstPoints(const std::vector<TClassificationDecision>& decisions,
-                                                  const std::vector<TGroundTruthPoint>& points, double radiusPx,
+                                                  const std::vector<core::TGroundTruthPoint>& points, double radiusPx,
                                                   double maxDt)
 {
   if (!(radiusPx >= 0)) throw std::invalid_argument("classificationAgainstPoints: radius must be >= 0 px");
   const CPointsByFrame byFrame(points);
   return evaluateClassifications(decisions, [&](const TClassificationDecision& d) -> std::optional<EMotionClass> {
-    const TGroundTruthPoint* p = byFrame.nearest(d.timestamp, d.uv, radiusPx, maxDt);
+    const core::TGroundTruthPoint* p = byFrame.nearest(d.timestamp, d.uv, radiusPx, maxDt);
     if (!p) return std::nullopt;
     return p->moving ? EMotionClass::Dynamic : EMotionClass::Static;
   });
 }
 
-std::vector<TTrackSample> readTracksCsv(const std::string& path)
+std::vector<core::TTrackSample> readTracksCsv(const std::string& path)
 {
   detail::CTableReader r(path, detail::CTableReader::ESeparator::Comma, "tracks file");
-  std::vector<TTrackSample> out;
+  std::vector<core::TTrackSample> out;
   static const std::vector<std::string> kHead{"timestamp", "feature_id", "x", "y", "z", "u", "v"};
   if (!r.next()) throw std::runtime_error(path + ": empty file (expected a header 'timestamp,feature_id,x,y,z,u,v')");
   if (r.fields().size() < kHead.size() || !std::equal(kHead.begin(), kHead.end(), r.fields().begin()))
@@ -243,7 +243,7 @@ std::vector<TTrackSample> readTracksCsv(const std::string& path)
   {
     if (r.fields().size() != nCols)
       r.fail("expected " + std::to_string(nCols) + " fields like the header, got " + std::to_string(r.fields().size()));
-    TTrackSample t;
+    core::TTrackSample t;
     if (iRange) t.range = r.number(iRange, "range");
     if (iSigma) t.rangeRelSigma = r.number(iSigma, "range_rel_sigma");
     t.timestamp = r.number(0, "timestamp");
@@ -272,8 +272,8 @@ std::string TTrackErrorResult::summary() const
   return s.str();
 }
 
-TTrackErrorResult trackErrorAgainstPoints(const std::vector<TTrackSample>& samples,
-                                          const std::vector<TGroundTruthPoint>& points, const TSim3& alignment,
+TTrackErrorResult trackErrorAgainstPoints(const std::vector<core::TTrackSample>& samples,
+                                          const std::vector<core::TGroundTruthPoint>& points, const TSim3& alignment,
                                           double radiusPx, double maxDt, double maxRelativeSigma)
 {
   if (!(radiusPx >= 0)) throw std::invalid_argument("trackErrorAgainstPoints: radius must be >= 0 px");
@@ -284,10 +284,10 @@ TTrackErrorResult trackErrorAgainstPoints(const std::vector<TTrackSample>& sampl
   r.maxRelativeSigma = maxRelativeSigma;
   std::set<std::int64_t> all, matchedIds;
   std::vector<double> err, range;
-  for (const TTrackSample& t : samples)
+  for (const core::TTrackSample& t : samples)
   {
     all.insert(t.featureId);
-    const TGroundTruthPoint* p = byFrame.nearest(t.timestamp, t.uv, radiusPx, maxDt);
+    const core::TGroundTruthPoint* p = byFrame.nearest(t.timestamp, t.uv, radiusPx, maxDt);
     if (!p)
       ++r.unmatched;
     else if (!p->moving)

@@ -1,5 +1,5 @@
 /* imm-monoslam — the ATE report of slam-eval: ATE (and optionally RPE) of a TUM trajectory. */
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/eval/ate.h>
 #include <immslam/eval/eval_app.h>
 #include <immslam/eval/rpe.h>
@@ -124,9 +124,9 @@ std::string jsonNumber(double v)
   return s.str();
 }
 
-TTrajectory readNonEmpty(const std::string& path)
+core::TTrajectory readNonEmpty(const std::string& path)
 {
-  TTrajectory t = readTumTrajectory(path);
+  core::TTrajectory t = core::readTumTrajectory(path);
   if (t.empty()) throw std::runtime_error(path + ": no poses in trajectory file");
   return t;
 }
@@ -174,8 +174,8 @@ int runEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ost
   size_t nEst = 0, nGt = 0;
   try
   {
-    const TTrajectory est = readNonEmpty(o.estPath);
-    const TTrajectory gt = readNonEmpty(o.gtPath);
+    const core::TTrajectory est = readNonEmpty(o.estPath);
+    const core::TTrajectory gt = readNonEmpty(o.gtPath);
     nEst = est.size();
     nGt = gt.size();
     try

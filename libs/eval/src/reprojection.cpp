@@ -25,13 +25,13 @@ struct TPoseCW
   Vec3 t;
 };
 
-TPoseCW cameraFromWorld(const TStampedPose& p)
+TPoseCW cameraFromWorld(const core::TStampedPose& p)
 {
   const Mat3 R_WC = math::quatToRotation(p.q_W_C);
   return {R_WC.transpose(), -R_WC.transpose() * p.p_W_C};
 }
 
-void setFromCameraFromWorld(TStampedPose& p, const TPoseCW& c)
+void setFromCameraFromWorld(core::TStampedPose& p, const TPoseCW& c)
 {
   const Mat3 R_WC = c.R.transpose();
   p.p_W_C = -R_WC * c.t;
@@ -45,7 +45,7 @@ double huberWeight(double n, double k) { return n <= k ? 1.0 : k / n; }
 
 /** Index of the pose whose timestamp is nearest to t within maxDt, or -1. `order` sorts poses by
  * time. */
-long nearestPose(const TTrajectory& poses, const std::vector<std::size_t>& order, double t, double maxDt)
+long nearestPose(const core::TTrajectory& poses, const std::vector<std::size_t>& order, double t, double maxDt)
 {
   const auto it = std::lower_bound(order.begin(), order.end(), t,
                                    [&](std::size_t i, double v) { return poses[i].timestamp < v; });
@@ -194,7 +194,7 @@ bool reprojectionResidual(const Mat3& R_CW, const Vec3& t_CW, const Vec3& X_W, c
   return true;
 }
 
-TBundleProblem makeBundleProblem(const std::vector<TSearchRow>& rows, const TTrajectory& poses,
+TBundleProblem makeBundleProblem(const std::vector<TSearchRow>& rows, const core::TTrajectory& poses,
                                  const camera::CCameraModel& cam, double maxDt, int minViews, int minPerPose)
 {
   if (minViews < 2) throw std::invalid_argument("makeBundleProblem: minViews must be >= 2");

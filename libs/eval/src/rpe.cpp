@@ -13,7 +13,7 @@
 
 namespace immslam::eval
 {
-TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta, EAlignment a,
+TRpeResult computeRpe(const core::TTrajectory& est, const core::TTrajectory& gt, int delta, EAlignment a,
                       double maxDt)
 {
   if (delta < 1) throw std::invalid_argument("computeRpe: delta must be >= 1");

@@ -2,7 +2,7 @@
  * and NIS reports (the ATE report is runEvalApp(), eval_app.cpp). */
 #include <immslam/eval/ate.h>
 #include <immslam/eval/classification_truth.h>
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/eval/eval_app.h>
 #include <immslam/eval/reprojection.h>
 #include <immslam/camera/CCameraModel.h>
@@ -223,7 +223,7 @@ int runTracks(const std::string& prog, const std::vector<std::string>& args, std
   const double maxDt = maxDtOption(p);
   // A rendered folder's truth is computed at each row's own pixel: a sub-pixel radius joins it.
   const double radius = numberOr(p, "--radius", 0, 1e4, rendered ? 0.5 : 3);
-  const TAteResult ate = computeAte(readTumTrajectory(*est), readTumTrajectory(*gt), EAlignment::Sim3, 0.01);
+  const TAteResult ate = computeAte(core::readTumTrajectory(*est), core::readTumTrajectory(*gt), EAlignment::Sim3, 0.01);
   const auto samples = readTracksCsv(p.positional[0]);
   const double maxRel = numberOr(p, "--max-rel-sigma", 1e-12, 1e12, 0.5);
   std::string truthReport;
@@ -237,7 +237,7 @@ int runTracks(const std::string& prog, const std::vector<std::string>& args, std
   out << "alignment    : Sim(3) of " << *est << " onto " << *gt << " (" << ate.nPairs << " poses, scale " << ate.scale
       << "; camera ATE " << ate.rmse << ")\n"
       << r.summary();
-  const bool hasSigma = std::any_of(samples.begin(), samples.end(), [](const TTrackSample& t) { return std::isfinite(t.rangeRelSigma); });
+  const bool hasSigma = std::any_of(samples.begin(), samples.end(), [](const core::TTrackSample& t) { return std::isfinite(t.rangeRelSigma); });
   if (hasSigma)
   {
     const TTrackErrorResult located = trackErrorAgainstPoints(samples, points, ate.sim3(), radius, maxDt, maxRel);
@@ -288,7 +288,7 @@ int runReprojection(const std::string& prog, const std::vector<std::string>& arg
   bo.maxIterations = static_cast<int>(numberOr(p, "--iterations", 1, 1e6, bo.maxIterations));
   const auto cam = camera::loadCalibFile(*p.value("--calib"));
   const auto rows = readSearchesCsv(p.positional[0]);
-  const TTrajectory poses = readTumTrajectory(p.positional[1]);
+  const core::TTrajectory poses = core::readTumTrajectory(p.positional[1]);
   TBundleProblem prob;
   try
   {
@@ -310,7 +310,7 @@ int runReprojection(const std::string& prog, const std::vector<std::string>& arg
         << (r.components > 1 ? ", " + std::to_string(r.components) + " unrelated blocks, each in its own frame" : "")
         << "; robust cost per measurement " << r.initialCost << " -> " << r.finalCost << " px^2)\n"
         << reprojectionStats(prob).summary();
-    writeTumTrajectory(prob.poses, *refined);
+    core::writeTumTrajectory(prob.poses, *refined);
     out << "refined poses   : " << *refined << "\n";
   }
   return 0;

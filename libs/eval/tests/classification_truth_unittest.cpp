@@ -238,15 +238,15 @@ TEST(TrackError, KnownErrorsAfterTheAlignmentAndAssociationByPixel)
   S.R << 0, -1, 0, 1, 0, 0, 0, 0, 1;
   S.t = Vec3(1, -2, 0.5);
   const TSim3 Sinv = S.inverse();
-  std::vector<TGroundTruthPoint> pts;
+  std::vector<core::TGroundTruthPoint> pts;
   auto gtPoint = [&](double t, std::int64_t id, bool moving, const Vec3& p, double u, double v) {
-    TGroundTruthPoint g;
+    core::TGroundTruthPoint g;
     g.timestamp = t, g.pointId = id, g.moving = moving, g.p_W = p, g.uv = Vec2(u, v);
     pts.push_back(g);
   };
-  std::vector<TTrackSample> tracks;
+  std::vector<core::TTrackSample> tracks;
   auto sample = [&](double t, std::int64_t id, const Vec3& pW_gt, double u, double v) {
-    TTrackSample s;
+    core::TTrackSample s;
     s.timestamp = t, s.featureId = id, s.p_W = Sinv.transform(pW_gt), s.uv = Vec2(u, v);
     tracks.push_back(s);
   };

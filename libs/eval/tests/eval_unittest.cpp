@@ -1,7 +1,7 @@
-/* Tests: TUM I/O, association, Umeyama alignment, ATE/RPE, NEES and chi-square bands, confusion
+/* Tests: association, Umeyama alignment, ATE/RPE, NEES and chi-square bands, confusion
  * matrix, statistics, and the ATE report of slam-eval run in-process. */
 #include <gtest/gtest.h>
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/eval/alignment.h>
 #include <immslam/eval/associate.h>
 #include <immslam/eval/ate.h>
@@ -44,13 +44,13 @@ TSim3 randomSim3(std::mt19937& rng, bool withScale)
   return TSim3{withScale ? u(rng) : 1.0, math::quatToRotation(randomQuat(rng)), randomVec3(rng, 3.0)};
 }
 /** A smooth non-planar camera path at 30 Hz with rotating orientation. */
-TTrajectory makeTrajectory(size_t n, double t0 = 100.0, double period = 1.0 / 30)
+core::TTrajectory makeTrajectory(size_t n, double t0 = 100.0, double period = 1.0 / 30)
 {
-  TTrajectory tr;
+  core::TTrajectory tr;
   for (size_t k = 0; k < n; ++k)
   {
     const double s = static_cast<double>(k) * 0.05;
-    TStampedPose p;
+    core::TStampedPose p;
     p.timestamp = t0 + static_cast<double>(k) * period;
     p.p_W_C = Vec3(std::cos(s) * 2, std::sin(1.3 * s), 0.3 * s + 0.2 * std::sin(3 * s));
     p.q_W_C = math::quatFromRotationVector(Vec3(0.1 * std::sin(s), s, 0.05 * s));
@@ -76,100 +76,11 @@ void expectProperRotation(const Mat3& R, double tol = 1e-12)
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
-// TUM I/O
-TEST(TumIO, RoundTripIsExact)
-{
-  std::mt19937 rng(1);
-  TTrajectory tr;
-  for (int k = 0; k < 50; ++k)
-  {
-    TStampedPose p;
-    p.timestamp = 1305031102.175304 + 0.033 * k;
-    p.p_W_C = randomVec3(rng, 10.0);
-    p.q_W_C = randomQuat(rng);
-    tr.push_back(p);
-  }
-  tr[3].p_W_C = Vec3(1e-12, -123456.789, 0.1);
-  const std::string path = tempPath("roundtrip.txt");
-  writeTumTrajectory(tr, path);
-  const TTrajectory back = readTumTrajectory(path);
-  ASSERT_EQ(back.size(), tr.size());
-  for (size_t k = 0; k < tr.size(); ++k)
-  {
-    EXPECT_NEAR(back[k].timestamp, tr[k].timestamp, 5e-7);
-    EXPECT_LT((back[k].p_W_C - tr[k].p_W_C).norm(), 1e-9);
-    // The read quaternion is re-normalized: equal to within rounding.
-    EXPECT_LT((back[k].q_W_C - tr[k].q_W_C).norm(), 1e-15);
-  }
-  EXPECT_EQ(back[3].p_W_C, tr[3].p_W_C);  // positions are bit exact
-}
-
-TEST(TumIO, FormatOrderCommentsAndNormalization)
-{
-  TStampedPose p;
-  p.timestamp = 12.5;
-  p.p_W_C = Vec3(1, -2, 0.5);
-  p.q_W_C = Vec4(0.5, 0.5, -0.5, 0.5);  // [qw qx qy qz]
-  EXPECT_EQ(formatTumLine(p), "12.500000 1 -2 0.5 0.5 -0.5 0.5 0.5");
-
-  const std::string path = tempPath("order.txt");
-  writeText(path, "# timestamp tx ty tz qx qy qz qw\n\n  \t\n1.0 1 2 3 0 0 0 2\r\n"
-                  "2.0,4,5,6,0,2,0,0\n  # indented comment\n3 +1 2e0 3 0 0 1 0\n");
-  const TTrajectory tr = readTumTrajectory(path);
-  ASSERT_EQ(tr.size(), 3u);
-  EXPECT_EQ(tr[0].q_W_C, Vec4(1, 0, 0, 0));  // qw = 2 normalized
-  EXPECT_EQ(tr[1].q_W_C, Vec4(0, 0, 1, 0));  // qy = 2 normalized
-  EXPECT_EQ(tr[1].p_W_C, Vec3(4, 5, 6));
-  EXPECT_EQ(tr[2].p_W_C, Vec3(1, 2, 3));
-  EXPECT_EQ(tr[2].q_W_C, Vec4(0, 0, 0, 1));
-  // Components near DBL_MAX: the norm must not overflow (found by fuzzing, tests/fuzz).
-  writeText(path, "1 0 0 0 1e308 1e308 0 1e308\n");
-  const TTrajectory big = readTumTrajectory(path);
-  EXPECT_NEAR(big[0].q_W_C.norm(), 1.0, 1e-15);
-  EXPECT_NEAR(big[0].q_W_C[0], 1 / std::sqrt(3.0), 1e-15);
-}
-
-TEST(TumIO, MalformedLineErrorNamesFileAndLine)
-{
-  const std::string path = tempPath("bad.txt");
-  const std::vector<std::pair<std::string, std::string>> cases = {
-      {"1 0 0 0 0 0 0 1\n# c\n2 0 0 0 0 0 1\n", ":3:"},             // 7 fields
-      {"1 0 0 0 0 0 0 1\n2 0 0 x 0 0 0 1\n", ":2:"},                // not a number
-      {"1 0 0 0 0 0 0 1 5\n", ":1:"},                               // 9 fields
-      {"\n\n1 0 0 0 0 0 0 0\n", ":3:"},                             // zero quaternion
-      {"1 0 0 nan 0 0 0 1\n", ":1:"},                               // not finite
-      {"1 0 0 0.5.5 0 0 0 1\n", ":1:"},                             // trailing junk
-  };
-  for (const auto& [text, where] : cases)
-  {
-    writeText(path, text);
-    try
-    {
-      readTumTrajectory(path);
-      ADD_FAILURE() << "no error for: " << text;
-    }
-    catch (const std::runtime_error& e)
-    {
-      EXPECT_NE(std::string(e.what()).find(path + where), std::string::npos) << e.what();
-    }
-  }
-  try
-  {
-    readTumTrajectory(tempPath("does_not_exist.txt"));
-    ADD_FAILURE() << "no error for a missing file";
-  }
-  catch (const std::runtime_error& e)
-  {
-    EXPECT_NE(std::string(e.what()).find("does_not_exist.txt"), std::string::npos);
-  }
-}
-
-// ---------------------------------------------------------------------------------------------
 // Association
 namespace
 {
 /** Reference: TUM associate.py's exhaustive greedy (all pairs within maxDt, closest first). */
-std::set<std::pair<size_t, size_t>> bruteForceAssociate(const TTrajectory& a, const TTrajectory& b, double maxDt)
+std::set<std::pair<size_t, size_t>> bruteForceAssociate(const core::TTrajectory& a, const core::TTrajectory& b, double maxDt)
 {
   std::vector<std::tuple<double, size_t, size_t>> c;
   for (size_t i = 0; i < a.size(); ++i)
@@ -194,20 +105,20 @@ TEST(Associate, JitterAndMissingEntries)
 {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> jitter(-0.004, 0.004);
-  const TTrajectory gtFull = makeTrajectory(300);
+  const core::TTrajectory gtFull = makeTrajectory(300);
   // Estimate: every frame except multiples of 7, jittered by up to 4 ms, in shuffled order.
-  TTrajectory est;
+  core::TTrajectory est;
   std::vector<size_t> truthGt;  // gt index each estimate pose belongs to
   for (size_t k = 0; k < gtFull.size(); ++k)
   {
     if (k % 7 == 0) continue;
-    TStampedPose p = gtFull[k];
+    core::TStampedPose p = gtFull[k];
     p.timestamp += jitter(rng);
     est.push_back(p);
     truthGt.push_back(k);
   }
   // Ground truth missing every 11th pose.
-  TTrajectory gt;
+  core::TTrajectory gt;
   std::vector<size_t> gtOrig;
   for (size_t k = 0; k < gtFull.size(); ++k)
     if (k % 11 != 5)
@@ -235,7 +146,7 @@ TEST(Associate, JitterAndMissingEntries)
   std::vector<size_t> perm(est.size());
   std::iota(perm.begin(), perm.end(), 0);
   std::shuffle(perm.begin(), perm.end(), rng);
-  TTrajectory shuffled;
+  core::TTrajectory shuffled;
   for (size_t k : perm) shuffled.push_back(est[k]);
   const auto pairs2 = associateByTimestamp(shuffled, gt, 0.01);
   ASSERT_EQ(pairs2.size(), pairs.size());
@@ -246,7 +157,7 @@ TEST(Associate, JitterAndMissingEntries)
   }
   // A tighter window loses the poses jittered by more than 2 ms.
   EXPECT_LT(associateByTimestamp(est, gt, 0.002).size(), pairs.size());
-  EXPECT_TRUE(associateByTimestamp(est, TTrajectory{}, 0.01).empty());
+  EXPECT_TRUE(associateByTimestamp(est, core::TTrajectory{}, 0.01).empty());
   EXPECT_THROW(associateByTimestamp(est, gt, -1.0), std::invalid_argument);
 }
 
@@ -257,10 +168,10 @@ TEST(Associate, EqualsExhaustiveGreedyWhenWindowBelowHalfPeriod)
   {
     std::uniform_real_distribution<double> u(0, 10);
     // b sampled every 0.05 s with gaps; a random times (dense, may cluster). maxDt = 0.02 < 0.025.
-    TTrajectory a, b;
+    core::TTrajectory a, b;
     for (int k = 0; k < 200; ++k)
-      if (rng() % 4) b.push_back(TStampedPose{0.05 * k, Vec3::Zero(), Vec4(1, 0, 0, 0)});
-    for (int k = 0; k < 150; ++k) a.push_back(TStampedPose{u(rng), Vec3::Zero(), Vec4(1, 0, 0, 0)});
+      if (rng() % 4) b.push_back(core::TStampedPose{0.05 * k, Vec3::Zero(), Vec4(1, 0, 0, 0)});
+    for (int k = 0; k < 150; ++k) a.push_back(core::TStampedPose{u(rng), Vec3::Zero(), Vec4(1, 0, 0, 0)});
     const auto p = associateByTimestamp(a, b, 0.02);
     const std::set<std::pair<size_t, size_t>> got(p.begin(), p.end());
     EXPECT_EQ(got, bruteForceAssociate(a, b, 0.02)) << "trial " << trial;
@@ -459,9 +370,9 @@ TEST(Sim3, InverseAndComposition)
 TEST(Ate, Sim3TransformedCopyHasZeroErrorAndRightScale)
 {
   std::mt19937 rng(10);
-  const TTrajectory gt = makeTrajectory(200);
+  const core::TTrajectory gt = makeTrajectory(200);
   const TSim3 T = randomSim3(rng, true);
-  const TTrajectory est = applySim3(T, gt);  // est = T(gt): alignment must be T^-1
+  const core::TTrajectory est = applySim3(T, gt);  // est = T(gt): alignment must be T^-1
   const TAteResult r = computeAte(est, gt);
   EXPECT_EQ(r.nPairs, gt.size());
   EXPECT_LT(r.rmse, 1e-9);
@@ -473,7 +384,7 @@ TEST(Ate, Sim3TransformedCopyHasZeroErrorAndRightScale)
   ASSERT_EQ(r.errors.size(), gt.size());
   EXPECT_EQ(r.errors[17].tGt, gt[17].timestamp);
   // The reported alignment maps est onto gt.
-  const TTrajectory aligned = applySim3(r.sim3(), est);
+  const core::TTrajectory aligned = applySim3(r.sim3(), est);
   EXPECT_LT((aligned[50].p_W_C - gt[50].p_W_C).norm(), 1e-9);
   // SE(3) cannot absorb the scale; no alignment is worse still.
   const TAteResult se3 = computeAte(est, gt, EAlignment::SE3);
@@ -487,12 +398,12 @@ TEST(Ate, Sim3TransformedCopyHasZeroErrorAndRightScale)
 TEST(Ate, SE3CopyAndPathLengthExtent)
 {
   // A square of side 2 in the z = 0 plane, 4 samples per side; est rigidly moved and noisy.
-  TTrajectory gt;
+  core::TTrajectory gt;
   const Vec3 corners[5] = {{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}, {0, 0, 0}};
   double t = 0;
   for (int side = 0; side < 4; ++side)
     for (int k = 0; k < 4; ++k)
-      gt.push_back(TStampedPose{t++, corners[side] + 0.25 * k * (corners[side + 1] - corners[side]),
+      gt.push_back(core::TStampedPose{t++, corners[side] + 0.25 * k * (corners[side + 1] - corners[side]),
                                 Vec4(1, 0, 0, 0)});
   std::mt19937 rng(12);
   const TSim3 T = randomSim3(rng, false);
@@ -505,7 +416,7 @@ TEST(Ate, SE3CopyAndPathLengthExtent)
   EXPECT_NEAR(r.rmseOverPath, r.rmse / 7.5, 1e-15);
 
   // Known errors with no alignment: est offset by +1 in z on half the poses.
-  TTrajectory est = gt;
+  core::TTrajectory est = gt;
   for (size_t k = 0; k < est.size(); k += 2) est[k].p_W_C.z() += 1.0;
   const TAteResult n = computeAte(est, gt, EAlignment::None, 0.001);
   EXPECT_NEAR(n.rmse, std::sqrt(0.5), 1e-12);
@@ -520,9 +431,9 @@ TEST(Ate, SE3CopyAndPathLengthExtent)
 TEST(Rpe, ScaledCopyHasZeroRpeWithSim3AndKnownErrorWithout)
 {
   std::mt19937 rng(13);
-  const TTrajectory gt = makeTrajectory(120);
+  const core::TTrajectory gt = makeTrajectory(120);
   const TSim3 T = randomSim3(rng, true);
-  const TTrajectory est = applySim3(T, gt);
+  const core::TTrajectory est = applySim3(T, gt);
   const TRpeResult r = computeRpe(est, gt, 5);
   EXPECT_EQ(r.nPairs, gt.size() - 5);
   EXPECT_NEAR(r.scale, 1.0 / T.s, 1e-10);
@@ -542,12 +453,12 @@ TEST(Rpe, DirectionErrorIsScaleFreeAndKnown)
   // A straight path along x at 0.1 per frame; the estimate drifts its heading by a known angle about
   // z (positions only, orientation identity): every relative translation over delta frames is rotated by
   // that angle, at any scale.
-  TTrajectory gt, est;
+  core::TTrajectory gt, est;
   const double ang = 10.0 * M_PI / 180.0;
   for (int k = 0; k < 50; ++k)
   {
-    gt.push_back(TStampedPose{k / 30.0, Vec3(0.1 * k, 0, 0), Vec4(1, 0, 0, 0)});
-    est.push_back(TStampedPose{k / 30.0, 3.0 * Vec3(0.1 * k * std::cos(ang), 0.1 * k * std::sin(ang), 0), Vec4(1, 0, 0, 0)});
+    gt.push_back(core::TStampedPose{k / 30.0, Vec3(0.1 * k, 0, 0), Vec4(1, 0, 0, 0)});
+    est.push_back(core::TStampedPose{k / 30.0, 3.0 * Vec3(0.1 * k * std::cos(ang), 0.1 * k * std::sin(ang), 0), Vec4(1, 0, 0, 0)});
   }
   const TRpeResult r = computeRpe(est, gt, 5, EAlignment::SE3);
   EXPECT_EQ(r.nDirections, r.nPairs);
@@ -555,7 +466,7 @@ TEST(Rpe, DirectionErrorIsScaleFreeAndKnown)
   EXPECT_NEAR(r.directionRmseDeg, 10.0, 1e-9);
   for (const auto& e : r.errors) EXPECT_NEAR(e.directionDeg, 10.0, 1e-9);
   // A ground truth that stands still for a while: those motions have no direction.
-  TTrajectory still = gt, est2 = gt;
+  core::TTrajectory still = gt, est2 = gt;
   for (int k = 10; k < 20; ++k) still[k].p_W_C = still[10].p_W_C;
   for (int k = 20; k < 50; ++k) still[k].p_W_C.x() -= 1.0;
   est2 = still;
@@ -575,12 +486,12 @@ TEST(Rpe, LocalScaleRatioShowsAKnownScaleDrift)
 {
   // A straight path along x at 0.1 per frame; the estimate keeps that step for 29 motions, then
   // doubles it (a monocular map whose scale jumps by 2): local scales 1 then 2 without alignment.
-  TTrajectory gt, est;
+  core::TTrajectory gt, est;
   for (int k = 0; k < 60; ++k)
   {
-    gt.push_back(TStampedPose{k / 30.0, Vec3(0.1 * k, 0, 0), Vec4(1, 0, 0, 0)});
+    gt.push_back(core::TStampedPose{k / 30.0, Vec3(0.1 * k, 0, 0), Vec4(1, 0, 0, 0)});
     const double x = k <= 29 ? 0.1 * k : 2.9 + 0.2 * (k - 29);
-    est.push_back(TStampedPose{k / 30.0, Vec3(x, 0, 0), Vec4(1, 0, 0, 0)});
+    est.push_back(core::TStampedPose{k / 30.0, Vec3(x, 0, 0), Vec4(1, 0, 0, 0)});
   }
   const TRpeResult r = computeRpe(est, gt, 1, EAlignment::SE3);
   ASSERT_EQ(r.nPairs, 59u);
@@ -786,11 +697,11 @@ TEST(Statistics, AgainstHandComputedValues)
 TEST(EvalApp, ExitCodesAndReport)
 {
   std::mt19937 rng(16);
-  const TTrajectory gt = makeTrajectory(100);
-  const TTrajectory est = applySim3(randomSim3(rng, true), gt);
+  const core::TTrajectory gt = makeTrajectory(100);
+  const core::TTrajectory est = applySim3(randomSim3(rng, true), gt);
   const std::string g = tempPath("app_gt.txt"), e = tempPath("app_est.txt"), bad = tempPath("app_bad.txt");
-  writeTumTrajectory(gt, g);
-  writeTumTrajectory(est, e);
+  core::writeTumTrajectory(gt, g);
+  core::writeTumTrajectory(est, e);
   writeText(bad, "1 2 3\n");
   const auto run = [](std::vector<std::string> args, std::string* out = nullptr, std::string* err = nullptr) {
     args.insert(args.begin(), "slam-eval ate");

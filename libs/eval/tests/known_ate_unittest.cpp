@@ -7,7 +7,7 @@
  *    copy is more spread, so the best scale shrinks it by s = a / (a + b), which trades part of the
  *    displacement against a scale error: residuals (1 - s)(g_i - mean g) - s d_i. */
 #include <gtest/gtest.h>
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/eval/ate.h>
 #include <immslam/math/quaternion.h>
 
@@ -22,13 +22,13 @@ using namespace immslam::eval;
 namespace
 {
 /** A hand-held-like path at 30 Hz (6 s): wobbling forward motion with turning orientation. */
-TTrajectory handheldPath()
+core::TTrajectory handheldPath()
 {
-  TTrajectory tr;
+  core::TTrajectory tr;
   for (int k = 0; k < 180; ++k)
   {
     const double t = k / 30.0;
-    TStampedPose p;
+    core::TStampedPose p;
     p.timestamp = 1000.0 + t;
     p.p_W_C = Vec3(0.4 * std::sin(0.9 * t) + 0.05 * std::sin(7 * t), 0.1 * std::sin(1.7 * t) + 0.03 * std::cos(5 * t),
                    0.25 * t + 0.04 * std::sin(3 * t));
@@ -41,7 +41,7 @@ TTrajectory handheldPath()
 /** Per-pose displacements with zero mean and zero cross-correlation with the positions
  * (sum_i (g_i - mean g) d_i^T = 0), scaled to the given RMS: random vectors minus their least-squares
  * fit by an affine function of the positions. */
-std::vector<Vec3> orthogonalDisplacements(const TTrajectory& gt, double rms, unsigned seed)
+std::vector<Vec3> orthogonalDisplacements(const core::TTrajectory& gt, double rms, unsigned seed)
 {
   const auto n = static_cast<Eigen::Index>(gt.size());
   Eigen::MatrixXd G(n, 4), D(n, 3);
@@ -70,7 +70,7 @@ TSim3 randomSim3(std::mt19937& rng, bool withScale)
 
 TEST(KnownAte, TrajectoryAgainstItselfIsZero)
 {
-  const TTrajectory gt = handheldPath();
+  const core::TTrajectory gt = handheldPath();
   for (const EAlignment a : {EAlignment::Sim3, EAlignment::SE3, EAlignment::None})
   {
     const TAteResult r = computeAte(gt, gt, a);
@@ -83,7 +83,7 @@ TEST(KnownAte, TrajectoryAgainstItselfIsZero)
 
 TEST(KnownAte, PerturbedCopyHasTheKnownError)
 {
-  const TTrajectory gt = handheldPath();
+  const core::TTrajectory gt = handheldPath();
   const std::vector<Vec3> d = orthogonalDisplacements(gt, 0.01, 5);
   // Check the construction: zero mean, zero cross-correlation, RMS 0.01.
   Vec3 mu = Vec3::Zero(), md = Vec3::Zero();
@@ -100,7 +100,7 @@ TEST(KnownAte, PerturbedCopyHasTheKnownError)
   ASSERT_LT(cross.norm(), 1e-12);
   ASSERT_NEAR(std::sqrt(b), 0.01, 1e-15);
 
-  TTrajectory displaced = gt;
+  core::TTrajectory displaced = gt;
   for (size_t i = 0; i < gt.size(); ++i) displaced[i].p_W_C += d[i];
   std::mt19937 rng(7);
   const TSim3 T = randomSim3(rng, true), Tr = randomSim3(rng, false);
@@ -128,7 +128,7 @@ TEST(KnownAte, PerturbedCopyHasTheKnownError)
   // Through TUM files (6-decimal timestamps, shortest round-trip numbers): same figures.
   const auto dir = std::filesystem::path(::testing::TempDir());
   const std::string g = (dir / "immslam_known_ate_gt.txt").string(), e = (dir / "immslam_known_ate_est.txt").string();
-  writeTumTrajectory(gt, g);
-  writeTumTrajectory(applySim3(T, displaced), e);
-  EXPECT_NEAR(computeAte(readTumTrajectory(e), readTumTrajectory(g)).rmse, expected, 1e-10);
+  core::writeTumTrajectory(gt, g);
+  core::writeTumTrajectory(applySim3(T, displaced), e);
+  EXPECT_NEAR(computeAte(core::readTumTrajectory(e), core::readTumTrajectory(g)).rmse, expected, 1e-10);
 }

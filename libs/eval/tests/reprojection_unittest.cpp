@@ -29,7 +29,7 @@ std::string tempPath(const std::string& name)
 /** A camera moving sideways and forward past a box of points, turning a little. */
 struct TScene
 {
-  TTrajectory poses;
+  core::TTrajectory poses;
   std::vector<Vec3> points;
 };
 
@@ -41,7 +41,7 @@ TScene makeScene(int nPoses = 60, int nPoints = 50)
   for (int j = 0; j < nPoints; ++j) s.points.emplace_back(ux(rng), uy(rng), uz(rng));
   for (int i = 0; i < nPoses; ++i)
   {
-    TStampedPose p;
+    core::TStampedPose p;
     p.timestamp = 0.1 * i;
     const double a = 0.05 * i;
     p.p_W_C = Vec3(0.6 * std::sin(a), 0.15 * std::cos(0.7 * a), 0.02 * i);
@@ -79,9 +79,9 @@ std::vector<TSearchRow> measure(const TScene& s, const camera::CCameraModel& cam
 }
 
 /** The trajectory turned by an angle growing along it (a drift the points cannot all agree with). */
-TTrajectory bend(const TTrajectory& t, double maxDeg)
+core::TTrajectory bend(const core::TTrajectory& t, double maxDeg)
 {
-  TTrajectory out = t;
+  core::TTrajectory out = t;
   for (std::size_t i = 0; i < out.size(); ++i)
   {
     const double f = static_cast<double>(i) / static_cast<double>(out.size() - 1);
@@ -92,9 +92,9 @@ TTrajectory bend(const TTrajectory& t, double maxDeg)
   return out;
 }
 
-double rmsAfterSim3(const TTrajectory& est, const TTrajectory& truth)
+double rmsAfterSim3(const core::TTrajectory& est, const core::TTrajectory& truth)
 {
-  const auto a = trajectoryPositions(est), b = trajectoryPositions(truth);
+  const auto a = core::trajectoryPositions(est), b = core::trajectoryPositions(truth);
   const TSim3 S = alignUmeyama(a, b, true);
   double s2 = 0;
   for (std::size_t i = 0; i < a.size(); ++i) s2 += (S.transform(a[i]) - b[i]).squaredNorm();
@@ -169,7 +169,7 @@ TEST(Reprojection, ABentTrajectoryShowsAndTheRefinementRecoversTheTrueOne)
   const TScene s = makeScene();
   const auto cam = pinhole();
   const auto rows = measure(s, *cam, 0.2);
-  const TTrajectory bent = bend(s.poses, 3.0);
+  const core::TTrajectory bent = bend(s.poses, 3.0);
   TBundleProblem p = makeBundleProblem(rows, bent, *cam, 1e-4, 8);
   const TReprojectionStats before = reprojectionStats(p);
   EXPECT_GT(before.rmsPx, 3.0);
@@ -203,7 +203,7 @@ TEST(Reprojection, TwoUnrelatedMapsAreAdjustedEachInItsOwnGauge)
   // Poses 30-59 see other points (ids + 1000, the same geometry shifted): no point links the halves.
   for (auto& r : rows)
     if (r.timestamp > 2.95) r.featureId += 1000;
-  const TTrajectory bent = bend(s.poses, 3.0);
+  const core::TTrajectory bent = bend(s.poses, 3.0);
   TBundleProblem p = makeBundleProblem(rows, bent, *cam, 1e-4, 8);
   const auto firsts = firstPoseOfEachComponent(p);
   ASSERT_EQ(firsts.size(), 2u);
@@ -216,8 +216,8 @@ TEST(Reprojection, TwoUnrelatedMapsAreAdjustedEachInItsOwnGauge)
   EXPECT_LT(reprojectionStats(p).rmsPx, 0.3);
   // Each half held at its first pose and back on the truth up to its own Sim(3).
   for (const std::size_t k : firsts) EXPECT_LT((p.poses[k].p_W_C - bent[k].p_W_C).norm(), 1e-6) << k;
-  const auto half = [](const TTrajectory& t, std::size_t a, std::size_t b) {
-    return TTrajectory(t.begin() + static_cast<std::ptrdiff_t>(a), t.begin() + static_cast<std::ptrdiff_t>(b));
+  const auto half = [](const core::TTrajectory& t, std::size_t a, std::size_t b) {
+    return core::TTrajectory(t.begin() + static_cast<std::ptrdiff_t>(a), t.begin() + static_cast<std::ptrdiff_t>(b));
   };
   EXPECT_LT(rmsAfterSim3(half(p.poses, 0, 30), half(s.poses, 0, 30)), 0.005);
   EXPECT_LT(rmsAfterSim3(half(p.poses, 30, 60), half(s.poses, 30, 60)), 0.005);
@@ -231,7 +231,7 @@ TEST(Reprojection, BadInputIsNamed)
   EXPECT_THROW(makeBundleProblem(rows, s.poses, *cam, 1e-4, 1), std::invalid_argument);
   EXPECT_THROW(makeBundleProblem(rows, s.poses, *cam, -1, 8), std::invalid_argument);
   // Poses of another run (timestamps shifted): nothing joins, and the message says so.
-  TTrajectory shifted = s.poses;
+  core::TTrajectory shifted = s.poses;
   for (auto& p : shifted) p.timestamp += 0.05;
   try
   {
@@ -261,7 +261,7 @@ TEST(Reprojection, CommandLine)
       f << r.timestamp << "," << r.featureId << "," << r.h.x() << "," << r.h.y() << ",1,0,1,1," << r.z.x() << ","
         << r.z.y() << ",0.99," << searchStatusName(r.status) << "\n";
   }
-  writeTumTrajectory(bend(s.poses, 2.0), poses);
+  core::writeTumTrajectory(bend(s.poses, 2.0), poses);
   std::ofstream(calib) << "# test\n" << cam->toCalibLine() << "\n";
 
   std::ostringstream out, err;
@@ -271,10 +271,10 @@ TEST(Reprojection, CommandLine)
       << err.str();
   EXPECT_NE(out.str().find("reprojection RMS"), std::string::npos) << out.str();
   EXPECT_NE(out.str().find("after bundle adjustment"), std::string::npos) << out.str();
-  EXPECT_EQ(readTumTrajectory(refined).size(), s.poses.size());
+  EXPECT_EQ(core::readTumTrajectory(refined).size(), s.poses.size());
   const auto rowsBack = readSearchesCsv(searches);
   EXPECT_GT(reprojectionStats(makeBundleProblem(rowsBack, bend(s.poses, 2.0), *cam, 1e-4, 8)).rmsPx, 2.0);
-  EXPECT_LT(reprojectionStats(makeBundleProblem(rowsBack, readTumTrajectory(refined), *cam, 1e-4, 8)).rmsPx, 0.5);
+  EXPECT_LT(reprojectionStats(makeBundleProblem(rowsBack, core::readTumTrajectory(refined), *cam, 1e-4, 8)).rmsPx, 0.5);
 
   std::ostringstream o2, e2;
   EXPECT_EQ(runSlamEvalApp({"slam-eval", "reprojection", searches, poses}, o2, e2), 2);

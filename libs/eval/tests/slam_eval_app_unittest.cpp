@@ -1,7 +1,7 @@
 /* Tests: runSlamEvalApp in process: subcommand dispatch, the old imm-eval form, usage errors (2)
  * and input errors (1). The program itself is run on small files by apps/slam-eval's test. */
 #include <gtest/gtest.h>
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/eval/slam_eval_app.h>
 
 #include <filesystem>
@@ -33,11 +33,11 @@ int run(std::vector<std::string> args, std::string* out = nullptr, std::string* 
 
 TEST(SlamEvalApp, DispatchOldFormAndUsage)
 {
-  TTrajectory gt;
+  core::TTrajectory gt;
   for (int k = 0; k < 20; ++k)
-    gt.push_back(TStampedPose{k / 30.0, Vec3(k, (k * k) % 5, (3 * k) % 4), Vec4(1, 0, 0, 0)});
+    gt.push_back(core::TStampedPose{k / 30.0, Vec3(k, (k * k) % 5, (3 * k) % 4), Vec4(1, 0, 0, 0)});
   const std::string g = tempPath("gt.txt");
-  writeTumTrajectory(gt, g);
+  core::writeTumTrajectory(gt, g);
 
   std::string out, outOld, err;
   EXPECT_EQ(run({"--help"}, &out), 0);
@@ -89,17 +89,17 @@ TEST(SlamEvalApp, TracksAgainstPointsAfterTheCameraAlignment)
 {
   // Camera ground truth and an estimate at half the scale: the Sim(3) of the cameras maps the
   // tracked positions onto the moving point exactly (error 0), the static row is counted apart.
-  TTrajectory gt, est;
+  core::TTrajectory gt, est;
   for (int k = 0; k < 10; ++k)
   {
     const Vec3 p(0.1 * k, 0.02 * k * k, 0.05 * (k % 3));
-    gt.push_back(TStampedPose{k / 15.0, p, Vec4(1, 0, 0, 0)});
-    est.push_back(TStampedPose{k / 15.0, 0.5 * p, Vec4(1, 0, 0, 0)});
+    gt.push_back(core::TStampedPose{k / 15.0, p, Vec4(1, 0, 0, 0)});
+    est.push_back(core::TStampedPose{k / 15.0, 0.5 * p, Vec4(1, 0, 0, 0)});
   }
   const std::string g = tempPath("tr_gt.txt"), e = tempPath("tr_est.txt"), pts = tempPath("tr_points.txt"),
                     tr = tempPath("tr_tracks.csv");
-  writeTumTrajectory(gt, g);
-  writeTumTrajectory(est, e);
+  core::writeTumTrajectory(gt, g);
+  core::writeTumTrajectory(est, e);
   std::ostringstream ps, ts;
   ps << std::setprecision(17) << "# timestamp point_id kind x y z u v\n";
   ts << std::setprecision(17) << "timestamp,feature_id,x,y,z,u,v\n";
@@ -126,18 +126,18 @@ TEST(SlamEvalApp, TracksAgainstPointsAfterTheCameraAlignment)
   // it; with one, its points are used, the report line printed and --gt defaults to the folder's.
   const std::string folder = tempPath("tr_rendered");
   std::filesystem::create_directories(folder);
-  writeTumTrajectory(gt, (std::filesystem::path(folder) / "groundtruth.txt").string());
+  core::writeTumTrajectory(gt, (std::filesystem::path(folder) / "groundtruth.txt").string());
   EXPECT_EQ(run({"tracks", tr, folder, "--est", e}, nullptr, &err), 2);
   EXPECT_NE(err.find(folder), std::string::npos) << err;
   TSlamEvalTruthSources truth;
   std::string seenFolder;
-  truth.renderedTrackTruth = [&](const std::string& f, const std::vector<TTrackSample>& samples, double,
+  truth.renderedTrackTruth = [&](const std::string& f, const std::vector<core::TTrackSample>& samples, double,
                                  std::string& report) {
     seenFolder = f;
     report = "fake truth";
-    std::vector<TGroundTruthPoint> truthPts;
+    std::vector<core::TGroundTruthPoint> truthPts;
     for (const auto& t : samples)
-      if (t.featureId == 12) truthPts.push_back(TGroundTruthPoint{t.timestamp, 0, true, 2 * t.p_W, t.uv});
+      if (t.featureId == 12) truthPts.push_back(core::TGroundTruthPoint{t.timestamp, 0, true, 2 * t.p_W, t.uv});
     return truthPts;
   };
   std::ostringstream o, e2;

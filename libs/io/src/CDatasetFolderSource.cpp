@@ -1,6 +1,6 @@
 /* imm-monoslam — dataset folder image source. */
 #include <immslam/camera/CCameraModel.h>
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/io/CDatasetFolderSource.h>
 #include <immslam/math/text.h>
 
@@ -73,7 +73,7 @@ CDatasetFolderSource::CDatasetFolderSource(const std::string& folder) : m_folder
   if (fs::exists(calib, ec)) m_calib = camera::loadCalibFile(calib);
 
   const std::string gt = (fs::path(folder) / "groundtruth.txt").string();
-  if (fs::exists(gt, ec)) m_gt = eval::readTumTrajectory(gt);
+  if (fs::exists(gt, ec)) m_gt = core::readTumTrajectory(gt);
 }
 
 std::string CDatasetFolderSource::imagePath(const TDatasetEntry& e) const

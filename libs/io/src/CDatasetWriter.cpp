@@ -37,7 +37,7 @@ CDatasetWriter::~CDatasetWriter()
   }
 }
 
-std::string CDatasetWriter::addFrame(double timestamp, const cv::Mat& image, const eval::TStampedPose* gt)
+std::string CDatasetWriter::addFrame(double timestamp, const cv::Mat& image, const core::TStampedPose* gt)
 {
   if (!m_rgb.is_open()) throw std::runtime_error("CDatasetWriter for " + m_folder + " is closed");
   char name[32];
@@ -68,9 +68,9 @@ std::string CDatasetWriter::addFrame(double timestamp, const cv::Mat& image, con
       if (!m_comment.empty()) m_gt << "# " << m_comment << "\n";
       m_gt << "# timestamp tx ty tz qx qy qz qw  (T_world_camera, camera x right, y down, z forward)\n";
     }
-    eval::TStampedPose p = *gt;
+    core::TStampedPose p = *gt;
     p.timestamp = timestamp;
-    m_gt << eval::formatTumLine(p) << '\n';
+    m_gt << core::formatTumLine(p) << '\n';
     if (!m_gt) throw std::runtime_error("write error in " + gtFile);
   }
   ++m_count;

@@ -64,7 +64,7 @@ bool isGroundTruth(const mrpt::obs::CObservation& o)
   return o.sensorLabel == "GT" && dynamic_cast<const mrpt::obs::CObservationRobotPose*>(&o);
 }
 
-eval::TStampedPose toStampedPose(const mrpt::obs::CObservationRobotPose& o)
+core::TStampedPose toStampedPose(const mrpt::obs::CObservationRobotPose& o)
 {
   // The quaternion comes from the rotation matrix, not from CPose3D::getAsQuaternion(): that one
   // goes through yaw/pitch/roll, which MRPT snaps to pitch = +-90 deg near gimbal lock (errors of
@@ -77,7 +77,7 @@ eval::TStampedPose toStampedPose(const mrpt::obs::CObservationRobotPose& o)
   Eigen::Quaterniond q(R_W_C);
   q.normalize();
   if (q.w() < 0) q.coeffs() *= -1.0;  // canonical sign: qw >= 0
-  eval::TStampedPose p;
+  core::TStampedPose p;
   p.timestamp = mrpt::Clock::toDouble(o.timestamp);
   p.p_W_C = Vec3(m.x(), m.y(), m.z());
   p.q_W_C = Vec4(q.w(), q.x(), q.y(), q.z());  // [qw qx qy qz], as mrpt::math::CQuaternion (r,x,y,z)
@@ -110,7 +110,7 @@ struct CRawlogSource::Impl
   bool sensoryFrames = false;
   std::string damage;  ///< empty: clean end
   camera::CCameraModel::Ptr calib;
-  eval::TTrajectory gt;
+  core::TTrajectory gt;
   std::vector<std::string> warnings;
 
   // Streaming state (second pass).
@@ -402,7 +402,7 @@ ENextStatus CRawlogSource::next(TFrame& frame, std::string& why)
 
 camera::CCameraModel::Ptr CRawlogSource::calibration() const { return m_impl->calib; }
 
-std::optional<eval::TTrajectory> CRawlogSource::groundTruth() const
+std::optional<core::TTrajectory> CRawlogSource::groundTruth() const
 {
   if (m_impl->gt.empty()) return std::nullopt;
   return m_impl->gt;

@@ -72,7 +72,7 @@ std::string externalName(const std::string& image, const fs::path& rawlogDirCano
  * -> yaw/pitch/roll conversion snaps pitch to +-90 deg when cos(pitch) is below ~5e-3 (rotation
  * errors up to 5e-3 on monoslammot_synth19): atan2 on the matrix of the quaternion is exact to
  * ~1e-15 there, and at an exact gimbal lock (roll := 0) the rotation is still represented exactly. */
-mrpt::poses::CPose3D toPose3D(const eval::TStampedPose& p)
+mrpt::poses::CPose3D toPose3D(const core::TStampedPose& p)
 {
   const Eigen::Quaterniond q(p.q_W_C[0], p.q_W_C[1], p.q_W_C[2], p.q_W_C[3]);
   const Mat3 R = q.normalized().toRotationMatrix();  // R = Rz(yaw) Ry(pitch) Rx(roll)
@@ -89,7 +89,7 @@ mrpt::poses::CPose3D toPose3D(const eval::TStampedPose& p)
   return mrpt::poses::CPose3D(p.p_W_C.x(), p.p_W_C.y(), p.p_W_C.z(), yaw, pitch, roll);
 }
 
-mrpt::obs::CObservationRobotPose::Ptr makeGroundTruth(const eval::TStampedPose& p)
+mrpt::obs::CObservationRobotPose::Ptr makeGroundTruth(const core::TStampedPose& p)
 {
   auto o = mrpt::obs::CObservationRobotPose::Create();
   o->sensorLabel = "GT";
@@ -126,7 +126,7 @@ TDataset2RawlogResult convertDatasetToRawlog(
     res.warnings.push_back("no " + calibFile + ": cameraParams left empty (run with --calib FILE)");
 
   const auto& entries = src.entries();
-  const eval::TTrajectory gt = src.groundTruth().value_or(eval::TTrajectory{});
+  const core::TTrajectory gt = src.groundTruth().value_or(core::TTrajectory{});
   std::vector<TEvent> events;
   events.reserve(entries.size() + gt.size());
   for (std::size_t i = 0; i < entries.size(); ++i)

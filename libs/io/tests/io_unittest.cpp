@@ -106,7 +106,7 @@ bool sameImage(const cv::Mat& a, const cv::Mat& b)
 
 double quatDistance(const Vec4& a, const Vec4& b) { return std::min((a - b).norm(), (a + b).norm()); }
 
-void expectSameTrajectory(const eval::TTrajectory& a, const eval::TTrajectory& b)
+void expectSameTrajectory(const core::TTrajectory& a, const core::TTrajectory& b)
 {
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i)
@@ -137,7 +137,7 @@ void writeSyntheticDataset(const std::string& folder, int n, bool colour, int w 
   CDatasetWriter wr(folder, *pinhole(w, h), "synthetic test sequence");
   for (int i = 0; i < n; ++i)
   {
-    eval::TStampedPose p;
+    core::TStampedPose p;
     p.p_W_C = Vec3(0.1 * i, -0.2 * i, 0.05);
     p.q_W_C = Vec4(std::cos(0.05 * i), 0, std::sin(0.05 * i), 0);
     wr.addFrame(100.0 + i / 30.0, syntheticImage(w, h, colour ? CV_8UC3 : CV_8UC1, i), &p);
@@ -288,13 +288,13 @@ TEST(DatasetWriter, RoundTrip)
   TempDir d;
   const int w = 50, h = 40;
   std::vector<cv::Mat> imgs;
-  eval::TTrajectory gt;
+  core::TTrajectory gt;
   {
     CDatasetWriter wr(d / "ds", *pinhole(w, h), "round trip");
     for (int i = 0; i < 4; ++i)
     {
       imgs.push_back(syntheticImage(w, h, i % 2 ? CV_8UC3 : CV_8UC1, 10 + i));
-      eval::TStampedPose p;
+      core::TStampedPose p;
       p.timestamp = 5 + 0.1 * i;
       p.p_W_C = Vec3(i, 2 * i, -i);
       p.q_W_C = Vec4(1, 0.1 * i, 0, 0).normalized();
@@ -476,12 +476,12 @@ TEST(Rawlog, GroundTruthNearGimbalLockExact)
                                 Vec4(0.70710678118654752, 0, 0.70710678118654752, 0),
                                 Vec4(0.70710678118654752, 0, -0.70710678118654752, 0), Vec4(0.5, -0.5, 0.5, 0.5),
                                 Vec4(0.1, 0.2, 0.3, 0.4)};
-  eval::TTrajectory gt;
+  core::TTrajectory gt;
   {
     CDatasetWriter wr(d / "ds", *pinhole(8, 8));
     for (std::size_t i = 0; i < qs.size(); ++i)
     {
-      eval::TStampedPose p;
+      core::TStampedPose p;
       p.timestamp = static_cast<double>(i);
       p.p_W_C = Vec3(1.0 * i, 2, 3);
       p.q_W_C = qs[i].normalized();
@@ -537,7 +537,7 @@ TEST(Rawlog, MixedObservationsSkippedAndCounted)
   EXPECT_EQ(src.calibration(), nullptr);  // default (zero) cameraParams
   ASSERT_TRUE(src.groundTruth());
   ASSERT_EQ(src.groundTruth()->size(), 2u);
-  const eval::TTrajectory gtAll = *src.groundTruth();  // groundTruth() returns a copy: keep it alive
+  const core::TTrajectory gtAll = *src.groundTruth();  // groundTruth() returns a copy: keep it alive
   const auto& g = gtAll[1];
   EXPECT_NEAR(g.timestamp, 13.0, 1e-6);
   EXPECT_NEAR(g.p_W_C.x(), 3.0, 1e-12);

@@ -18,9 +18,9 @@ namespace immslam::sim
 {
 namespace
 {
-eval::TStampedPose stamped(const TPose& p, double t)
+core::TStampedPose stamped(const TPose& p, double t)
 {
-  eval::TStampedPose s;
+  core::TStampedPose s;
   s.timestamp = t;
   s.p_W_C = p.t;
   s.q_W_C = p.q;
@@ -80,12 +80,12 @@ void CSimulator::checkClearance() const
   }
 }
 
-eval::TStampedPose CSimulator::cameraPose(std::size_t k) const { return stamped(m_traj.pose(k), timestamp(k)); }
+core::TStampedPose CSimulator::cameraPose(std::size_t k) const { return stamped(m_traj.pose(k), timestamp(k)); }
 
-eval::TTrajectory CSimulator::groundTruth(std::size_t n) const
+core::TTrajectory CSimulator::groundTruth(std::size_t n) const
 {
   if (n == 0 || n > frameCount()) n = frameCount();
-  eval::TTrajectory t;
+  core::TTrajectory t;
   t.reserve(n);
   for (std::size_t k = 0; k < n; ++k) t.push_back(cameraPose(k));
   return t;
@@ -139,7 +139,7 @@ std::optional<TRayHit> CSimulator::raycast(std::size_t k, const Vec2& uv) const
   return m_renderer.raycast(m_world.boxesAt(motionTime(k)), m_traj.pose(k), uv);
 }
 
-std::optional<TRayHit> CSimulator::raycast(const eval::TStampedPose& T_W_C, const Vec2& uv, double ts) const
+std::optional<TRayHit> CSimulator::raycast(const core::TStampedPose& T_W_C, const Vec2& uv, double ts) const
 {
   TPose p;
   p.t = T_W_C.p_W_C;

@@ -8,7 +8,7 @@
 
 namespace immslam::sim
 {
-std::vector<eval::TGroundTruthPoint> truthAtPixels(const CSimulator& sim, const std::vector<eval::TTrackSample>& samples,
+std::vector<core::TGroundTruthPoint> truthAtPixels(const CSimulator& sim, const std::vector<core::TTrackSample>& samples,
                                                    double maxDt, double boundaryPx, double depthStep,
                                                    TPixelTruthStats* stats)
 {
@@ -16,11 +16,11 @@ std::vector<eval::TGroundTruthPoint> truthAtPixels(const CSimulator& sim, const 
   st.samples = samples.size();
   std::vector<double> times(sim.frameCount());
   for (std::size_t k = 0; k < times.size(); ++k) times[k] = sim.timestamp(k);
-  std::vector<eval::TGroundTruthPoint> out;
+  std::vector<core::TGroundTruthPoint> out;
   out.reserve(samples.size());
   for (std::size_t s = 0; s < samples.size(); ++s)
   {
-    const eval::TTrackSample& smp = samples[s];
+    const core::TTrackSample& smp = samples[s];
     // Nearest frame by timestamp (the timestamps increase with k).
     const auto it = std::lower_bound(times.begin(), times.end(), smp.timestamp);
     std::size_t k = static_cast<std::size_t>(it - times.begin());
@@ -48,7 +48,7 @@ std::vector<eval::TGroundTruthPoint> truthAtPixels(const CSimulator& sim, const 
       ++st.boundary;
       continue;
     }
-    eval::TGroundTruthPoint p;
+    core::TGroundTruthPoint p;
     p.timestamp = times[k];
     p.pointId = static_cast<std::int64_t>(s);
     p.moving = hit->objectId > 0;
@@ -61,8 +61,8 @@ std::vector<eval::TGroundTruthPoint> truthAtPixels(const CSimulator& sim, const 
   return out;
 }
 
-std::vector<eval::TGroundTruthPoint> truthAtPixelsOfRenderedFolder(const std::string& folder,
-                                                                   const std::vector<eval::TTrackSample>& samples,
+std::vector<core::TGroundTruthPoint> truthAtPixelsOfRenderedFolder(const std::string& folder,
+                                                                   const std::vector<core::TTrackSample>& samples,
                                                                    double maxDt, TPixelTruthStats* stats)
 {
   const std::filesystem::path ini = std::filesystem::path(folder) / "scenario.ini";

@@ -256,7 +256,7 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
     cv::Mat out;
     cv::remap(in, out, mapU, mapV, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(0));
     // Ground truth: the virtual camera in the source's world (the source pose, or the identity).
-    eval::TStampedPose gt;
+    core::TStampedPose gt;
     gt.timestamp = fr.timestamp;
     gt.q_W_C = q;
     bool haveGt = o.still;

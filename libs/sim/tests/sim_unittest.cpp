@@ -2,6 +2,7 @@
  * masks, projections), camera motion (labels, smoothness), distortion, texture quality, outputs. */
 #include <gtest/gtest.h>
 #include <immslam/camera/CCameraModel.h>
+#include <immslam/eval/classification_truth.h>
 #include <immslam/math/quaternion.h>
 #include <immslam/sim/CSimulator.h>
 #include <immslam/sim/CSyntheticSource.h>
@@ -112,7 +113,7 @@ bool projectW(const camera::CCameraModel& cam, const TPose& T_W_C, const Vec3& p
   return p_C.z() > 1e-6 && cam.project(p_C, uv);
 }
 
-TPose toPose(const eval::TStampedPose& s)
+TPose toPose(const core::TStampedPose& s)
 {
   TPose p;
   p.t = s.p_W_C;
@@ -364,7 +365,7 @@ TEST(SimGeometry, TruthAtTrackedPixelsIsTheSurfacePointSeenThere)
   cv::Mat inner, outer;
   cv::erode(mask > 0, inner, cv::Mat::ones(9, 9, CV_8U));  // 4 px inside an object
   cv::erode(mask == 0, outer, cv::Mat::ones(9, 9, CV_8U));
-  std::vector<eval::TTrackSample> samples;
+  std::vector<core::TTrackSample> samples;
   std::vector<int> kind;  // 1 moving, 0 static, 2 silhouette
   for (int v = 10; v < mask.rows - 10; v += 7)
     for (int u = 10; u < mask.cols - 10; u += 7)
@@ -372,14 +373,14 @@ TEST(SimGeometry, TruthAtTrackedPixelsIsTheSurfacePointSeenThere)
       const bool edge = mask.at<std::uint8_t>(v, u) != mask.at<std::uint8_t>(v, u + 1);
       const int c = inner.at<std::uint8_t>(v, u) ? 1 : outer.at<std::uint8_t>(v, u) ? 0 : edge ? 2 : -1;
       if (c < 0) continue;
-      eval::TTrackSample t;
+      core::TTrackSample t;
       t.timestamp = sim.timestamp(k) + 1e-6;
       t.featureId = static_cast<std::int64_t>(samples.size());
       t.uv = Vec2(u + 0.3, v + 0.6);
       samples.push_back(t);
       kind.push_back(c);
     }
-  eval::TTrackSample late = samples.front();
+  core::TTrackSample late = samples.front();
   late.timestamp = sim.timestamp(k) + 0.5 / sim.scenario().fps;  // half-way between two frames
   samples.push_back(late);
   kind.push_back(3);
@@ -1117,7 +1118,7 @@ TEST(SimRotate, EveryStaticPointIsWhereTheTrueRotationPutsIt)
   EXPECT_EQ(virt->modelName(), "pinhole");
   EXPECT_EQ(virt->width(), 160);
   EXPECT_DOUBLE_EQ(virt->fx(), 150.0);
-  const auto gt = eval::readTumTrajectory((dst.path / "groundtruth.txt").string());
+  const auto gt = core::readTumTrajectory((dst.path / "groundtruth.txt").string());
   ASSERT_EQ(gt.size(), static_cast<std::size_t>(TStillScene::kFrames));
   const auto labels = dataLines(dst.path / "motion_labels.txt");
   ASSERT_EQ(labels.size(), gt.size());

@@ -34,7 +34,7 @@ Mat3 rotationBodyFromOptical()
 }
 }  // namespace
 
-mrpt::poses::CPose3D toMrptPose(const eval::TStampedPose& pose)
+mrpt::poses::CPose3D toMrptPose(const core::TStampedPose& pose)
 {
   const Vec4 q = pose.q_W_C.norm() > 0 ? Vec4(pose.q_W_C.normalized()) : Vec4(1, 0, 0, 0);
   return poseFromRt(math::quatToRotation(q), pose.p_W_C);

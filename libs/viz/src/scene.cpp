@@ -89,7 +89,7 @@ mo::CSetOfLines::Ptr polyline(const std::vector<Vec3>& pts, const TColour& col, 
   return lines;
 }
 
-std::vector<Vec3> positions(const std::vector<eval::TStampedPose>& poses)
+std::vector<Vec3> positions(const std::vector<core::TStampedPose>& poses)
 {
   std::vector<Vec3> out;
   out.reserve(poses.size());
@@ -124,7 +124,7 @@ mo::CSetOfObjects::Ptr group(const std::string& name)
 }
 
 mo::CSetOfObjects::Ptr cameraObject(
-    const eval::TStampedPose& pose, const camera::CCameraModel* cam, double depth, double axes,
+    const core::TStampedPose& pose, const camera::CCameraModel* cam, double depth, double axes,
     const TSceneOptions& o)
 {
   auto g = group("camera");
@@ -347,7 +347,7 @@ mo::COpenGLScene::Ptr buildScene(const TSceneContent& c, const TSceneOptions& o)
     world->insert(gt);
   }
 
-  std::optional<eval::TStampedPose> cur = c.currentCamera;
+  std::optional<core::TStampedPose> cur = c.currentCamera;
   if (!cur && !c.trajectory.empty()) cur = c.trajectory.back();
   if (cur && cur->p_W_C.allFinite() && cur->q_W_C.allFinite())
     world->insert(cameraObject(*cur, c.camera.get(), frustum, axes, o));

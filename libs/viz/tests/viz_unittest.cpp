@@ -92,7 +92,7 @@ mrpt::math::CMatrixDouble33 toMrpt(const Mat3& m)
 }
 
 /** A pose looking along direction `fwd` (optical z) from p, with y roughly down. */
-eval::TStampedPose lookingAlong(const Vec3& p, const Vec3& fwd, double t = 0)
+core::TStampedPose lookingAlong(const Vec3& p, const Vec3& fwd, double t = 0)
 {
   const Vec3 z = fwd.normalized();
   Vec3 x = Vec3::UnitY().cross(z);
@@ -100,7 +100,7 @@ eval::TStampedPose lookingAlong(const Vec3& p, const Vec3& fwd, double t = 0)
   const Vec3 y = z.cross(x);
   Mat3 R;
   R << x, y, z;
-  eval::TStampedPose pose;
+  core::TStampedPose pose;
   pose.timestamp = t;
   pose.p_W_C = p;
   pose.q_W_C = math::fromEigen(Eigen::Quaterniond(R));
@@ -125,7 +125,7 @@ TSceneContent fullContent()
     c.trajectory.push_back(lookingAlong(Vec3(0.5 * t, 0.02 * std::sin(6 * t), 0.3 * t),
         Vec3(0.1 * t, 0, 1), k * 0.033));
   }
-  std::vector<eval::TStampedPose> gt = c.trajectory;
+  std::vector<core::TStampedPose> gt = c.trajectory;
   for (auto& p : gt) p.p_W_C += Vec3(0.02, 0.0, -0.01);
   c.groundTruth = gt;
   c.camera = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 159.5, 119.5});
@@ -252,7 +252,7 @@ TEST(VizScene, SaveLoadKeepsNamedObjectsAndCounts)
 TEST(VizScene, OptionalPartsAreLeftOut)
 {
   TSceneContent c;
-  c.trajectory.push_back(eval::TStampedPose());
+  c.trajectory.push_back(core::TStampedPose());
   TSceneOptions o;
   o.showGrid = false;
   o.showOriginAxes = false;
@@ -434,7 +434,7 @@ TEST(VizScene, UnknownDepthFeaturesAreRays)
   d.cov_tpr = Vec3(1e-4, 1e-4, 0.25).asDiagonal();
   f.inverseDepth = d;
   c.points.push_back(f);
-  c.trajectory.push_back(eval::TStampedPose());
+  c.trajectory.push_back(core::TStampedPose());
   TSceneOptions o;
   o.rayLength = 7.0;
   o.underflowRange = 70.0;
@@ -641,7 +641,7 @@ TEST(VizRender, EllipsoidSurfacesWidenTheFittedBox)
   f.p_W = Vec3(0, 0, 2);
   f.cov_W = Vec3(0.04, 0.01, 0.01).asDiagonal();  // 3 sigma = 0.6 along x
   c.points.push_back(f);
-  c.trajectory.push_back(eval::TStampedPose());
+  c.trajectory.push_back(core::TStampedPose());
   TSceneOptions o;
   o.showOriginAxes = false;
   const auto s = buildScene(c, o);

@@ -3,7 +3,7 @@
  * everything up to its last frame. */
 #pragma once
 
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/io/CCsvWriter.h>
 #include <immslam/system/CMonoSlamSystem.h>
 
@@ -27,13 +27,13 @@ class COutputFiles
   /** Writes map.csv (final map, world frame). */
   void writeMap(const slam::CMonoSlamIMM& slam) const;
 
-  const eval::TTrajectory& trajectory() const { return m_traj; }
+  const core::TTrajectory& trajectory() const { return m_traj; }
   std::string path(const std::string& name) const;
 
  private:
   std::string m_dir;
   std::ofstream m_trajFile;
   std::unique_ptr<io::CCsvWriter> m_probs, m_stats, m_searches, m_classes, m_tracks, m_shadowLog;
-  eval::TTrajectory m_traj;
+  core::TTrajectory m_traj;
 };
 }  // namespace immslam::app

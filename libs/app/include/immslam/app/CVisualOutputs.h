@@ -28,17 +28,17 @@ class CVisualOutputs
 
   /** Per processed frame: overlay (when enabled), periodic scene, and the series for the plots. */
   void onFrame(std::size_t frameIndex, const cv::Mat& image, const system::TSystemFrame& fr,
-               const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
+               const slam::CMonoSlamIMM& slam, const core::TTrajectory& trajectory,
                const std::vector<std::string>& extraText = {});
 
   /** At the end: scene.3Dscene (+ scene.png), plots. \param labels true motion label per processed
    * frame (empty if unknown). Never throws for a figure that cannot be made (logs a warning). */
-  void finish(const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
-              const std::optional<eval::TTrajectory>& groundTruth, const std::optional<eval::TAteResult>& ate,
+  void finish(const slam::CMonoSlamIMM& slam, const core::TTrajectory& trajectory,
+              const std::optional<core::TTrajectory>& groundTruth, const std::optional<eval::TAteResult>& ate,
               const std::vector<std::string>& labels, std::vector<std::string>& warnings);
 
   /** Scene content of the current state (trajectory, camera, map with uncertainties). */
-  viz::TSceneContent sceneContent(const slam::CMonoSlamIMM& slam, const eval::TTrajectory& trajectory,
+  viz::TSceneContent sceneContent(const slam::CMonoSlamIMM& slam, const core::TTrajectory& trajectory,
                                   const std::string& title) const;
 
  private:

@@ -63,7 +63,6 @@ class CIMMEstimator
   /** mu_{k|k-1} = pi^T mu_{k-1|k-1} (Fig. 2 step 1, eq. 7), valid after mix(). */
   const VecX& predictedProbabilities() const { return m_muPred; }
   const MatX& transition() const { return m_pi; }
-  double probabilityFloor() const { return m_floor; }
 
   /** IMM paper Fig. 2 step 1 (filter reinitialization): predicted probabilities
    * \f$ c_i = \mu^i_{k|k-1} = \sum_j \pi_{ji}\mu^j \f$, mixing weights

@@ -1,7 +1,7 @@
 /* imm-monoslam — timestamp association of two trajectories (estimate vs ground truth). */
 #pragma once
 
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 
 #include <cstddef>
 #include <utility>
@@ -21,5 +21,5 @@ namespace immslam::eval
  * \return pairs (index into a, index into b), sorted by a's timestamp.
  * \throws std::invalid_argument if maxDt is negative or NaN. */
 std::vector<std::pair<size_t, size_t>> associateByTimestamp(
-    const TTrajectory& a, const TTrajectory& b, double maxDt = 0.01);
+    const core::TTrajectory& a, const core::TTrajectory& b, double maxDt = 0.01);
 }  // namespace immslam::eval

@@ -1,7 +1,7 @@
 /* imm-monoslam — absolute trajectory error (ATE) after Sim(3)/SE(3) alignment. */
 #pragma once
 
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/eval/alignment.h>
 
 #include <cstddef>
@@ -47,12 +47,12 @@ struct TAteResult
 
 /** Applies x -> s R x + t to every position and R to every orientation (q <- q_R q, normalized);
  * timestamps unchanged. */
-TTrajectory applySim3(const TSim3& S, const TTrajectory& traj);
+core::TTrajectory applySim3(const TSim3& S, const core::TTrajectory& traj);
 
 /** Alignment of est onto gt over given pairs (est index, gt index): alignUmeyama on the
  * positions with scale (Sim3), without (SE3), or the identity (None).
  * \param rank optional output, as in alignUmeyama (3 for None). */
-TSim3 alignTrajectories(const TTrajectory& est, const TTrajectory& gt,
+TSim3 alignTrajectories(const core::TTrajectory& est, const core::TTrajectory& gt,
                         const std::vector<std::pair<size_t, size_t>>& pairs, EAlignment a,
                         int* rank = nullptr);
 
@@ -60,10 +60,10 @@ TSim3 alignTrajectories(const TTrajectory& est, const TTrajectory& gt,
  * (associateByTimestamp, maxDt), aligns est onto gt (EAlignment) with Umeyama's method, and
  * measures the position error of every pair (and the rotation error after the same rotation).
  * \throws std::runtime_error if no pair is found within maxDt. */
-TAteResult computeAte(const TTrajectory& est, const TTrajectory& gt,
+TAteResult computeAte(const core::TTrajectory& est, const core::TTrajectory& gt,
                       EAlignment a = EAlignment::Sim3, double maxDt = 0.01);
 
 /** The per-pair errors of computeAte() (for plots of error against time). */
-std::vector<TAtePairError> ateOverTime(const TTrajectory& est, const TTrajectory& gt,
+std::vector<TAtePairError> ateOverTime(const core::TTrajectory& est, const core::TTrajectory& gt,
                                        EAlignment a = EAlignment::Sim3, double maxDt = 0.01);
 }  // namespace immslam::eval

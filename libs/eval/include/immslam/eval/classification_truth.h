@@ -3,6 +3,7 @@
 #pragma once
 
 #include <immslam/eval/alignment.h>
+#include <immslam/core/point_tracks.h>
 #include <immslam/eval/classification.h>
 #include <immslam/math/types.h>
 
@@ -103,20 +104,10 @@ TClassificationResult classificationAgainstMaskFolder(const std::vector<TClassif
                                                       const std::string& datasetFolder, int radius = 1,
                                                       double maxDt = 1e-4);
 
-/** One simulated point at one frame (a line of points_groundtruth.txt). */
-struct TGroundTruthPoint
-{
-  double timestamp = 0;          ///< frame time (s)
-  std::int64_t pointId = 0;      ///< the point's id
-  bool moving = false;           ///< kind: moving (true) or static
-  Vec3 p_W = Vec3::Zero();       ///< world position
-  Vec2 uv = Vec2::Zero();        ///< its (noisy) projection in that frame
-};
-
 /** Reads points_groundtruth.txt (../shared/data/monoslammot_synth19): lines
  * `timestamp point_id kind x y z u v`, kind `static` or `moving`, '#' comments.
  * \throws std::runtime_error naming `file:line` for a malformed line or unknown kind. */
-std::vector<TGroundTruthPoint> readPointsGroundTruth(const std::string& path);
+std::vector<core::TGroundTruthPoint> readPointsGroundTruth(const std::string& path);
 
 /** Scores decisions against projected ground-truth points: the truth of a decision is the kind of
  * the point nearest to its pixel among the points of the frame within maxDt of its timestamp,
@@ -124,28 +115,14 @@ std::vector<TGroundTruthPoint> readPointsGroundTruth(const std::string& path);
  * the decision is unmatched.
  * \throws std::invalid_argument if radiusPx is negative or NaN. */
 TClassificationResult classificationAgainstPoints(const std::vector<TClassificationDecision>& decisions,
-                                                  const std::vector<TGroundTruthPoint>& points,
+                                                  const std::vector<core::TGroundTruthPoint>& points,
                                                   double radiusPx = 3.0, double maxDt = 1e-4);
-
-/** One tracked position of a dynamic feature (a row of tracks.csv). */
-struct TTrackSample
-{
-  double timestamp = 0;      ///< frame time (s)
-  std::int64_t featureId = 0;  ///< the feature's id
-  Vec3 p_W = Vec3::Zero();   ///< estimated world position (the estimate's frame and scale)
-  Vec2 uv = Vec2::Zero();    ///< measured pixel in that frame
-  /** Distance from the camera and its relative 1-sigma (columns `range`, `range_rel_sigma`; NaN
-   * when the file has no such column): small for a located point, large for a bearing of unknown
-   * depth. */
-  double range = std::numeric_limits<double>::quiet_NaN();
-  double rangeRelSigma = std::numeric_limits<double>::quiet_NaN();  ///< see range
-};
 
 /** Reads tracks.csv: header starting `timestamp,feature_id,x,y,z,u,v`, optional columns `range`
  * and `range_rel_sigma` anywhere after them (other columns ignored).
  * \throws std::runtime_error naming `file:line` for a bad header, a missing field or a value that
  *         is not a number, and naming the file when it cannot be opened. */
-std::vector<TTrackSample> readTracksCsv(const std::string& path);
+std::vector<core::TTrackSample> readTracksCsv(const std::string& path);
 
 /** Tracked positions of dynamic features against the moving ground-truth points. */
 struct TTrackErrorResult
@@ -171,11 +148,11 @@ struct TTrackErrorResult
  * (within radiusPx, frames within maxDt); for a moving point the error is |S(p_W) - p_gt| where S
  * maps the estimate's world frame onto the ground truth's (the Sim(3) of the camera trajectory's
  * alignment, computeAte().sim3()). With a finite maxRelativeSigma, rows on a moving point whose
- * TTrackSample::rangeRelSigma exceeds it (or is unknown) are counted as uncertain and left out:
+ * core::TTrackSample::rangeRelSigma exceeds it (or is unknown) are counted as uncertain and left out:
  * a bearing-only track locates its point only once the motion has given it parallax.
  * \throws std::invalid_argument if radiusPx is negative or NaN, or maxRelativeSigma is NaN or <= 0. */
-TTrackErrorResult trackErrorAgainstPoints(const std::vector<TTrackSample>& samples,
-                                          const std::vector<TGroundTruthPoint>& points, const TSim3& alignment,
+TTrackErrorResult trackErrorAgainstPoints(const std::vector<core::TTrackSample>& samples,
+                                          const std::vector<core::TGroundTruthPoint>& points, const TSim3& alignment,
                                           double radiusPx = 3.0, double maxDt = 1e-4,
                                           double maxRelativeSigma = std::numeric_limits<double>::infinity());
 }  // namespace immslam::eval

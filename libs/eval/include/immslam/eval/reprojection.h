@@ -7,7 +7,7 @@
  * but apart)? No estimator depends on this code; it only reads outputs. */
 #pragma once
 
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/eval/search_nis.h>
 #include <immslam/math/types.h>
 
@@ -37,7 +37,7 @@ struct TBundleObservation
  * (exact pixels for a pinhole camera, the undistorted image for the others). */
 struct TBundleProblem
 {
-  TTrajectory poses;                      ///< camera poses T_W_C, in time order
+  core::TTrajectory poses;                      ///< camera poses T_W_C, in time order
   std::vector<std::int64_t> featureIds;   ///< id of each point (searches.csv feature_id)
   std::vector<Vec3> points;               ///< feature positions in W
   std::vector<TBundleObservation> obs;    ///< measurements, grouped by point
@@ -61,7 +61,7 @@ bool reprojectionResidual(const Mat3& R_CW, const Vec3& t_CW, const Vec3& X_W, c
  * \throws std::invalid_argument if minViews < 2, minPerPose < 1 or maxDt < 0;
  * \throws std::runtime_error if no feature has minViews joined measurements (the message says how
  *         many rows were used and joined: a wrong trajectory file shows as 0 joined). */
-TBundleProblem makeBundleProblem(const std::vector<TSearchRow>& rows, const TTrajectory& poses,
+TBundleProblem makeBundleProblem(const std::vector<TSearchRow>& rows, const core::TTrajectory& poses,
                                  const camera::CCameraModel& cam, double maxDt, int minViews,
                                  int minPerPose = 6);
 

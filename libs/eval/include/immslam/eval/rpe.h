@@ -1,7 +1,7 @@
 /* imm-monoslam — relative pose error (RPE) over a fixed frame delta. */
 #pragma once
 
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/eval/alignment.h>
 
 #include <cstddef>
@@ -62,6 +62,6 @@ struct TRpeResult
  * alignment 1 means the run's overall scale).
  * \param delta step in associated pairs (>= 1): 1 = consecutive associated frames.
  * \throws std::invalid_argument if delta < 1; std::runtime_error if fewer than delta + 1 pairs. */
-TRpeResult computeRpe(const TTrajectory& est, const TTrajectory& gt, int delta = 1,
+TRpeResult computeRpe(const core::TTrajectory& est, const core::TTrajectory& gt, int delta = 1,
                       EAlignment a = EAlignment::Sim3, double maxDt = 0.01);
 }  // namespace immslam::eval

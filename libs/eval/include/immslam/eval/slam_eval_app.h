@@ -18,7 +18,7 @@ struct TSlamEvalTruthSources
   /** The true points at the pixels of tracked samples of a dataset folder written by imm-render
    * (sim::truthAtPixelsOfRenderedFolder): (folder, samples, maxDt, report) -> points at the
    * samples' own pixels; `report` receives one line on the samples left out. */
-  std::function<std::vector<TGroundTruthPoint>(const std::string&, const std::vector<TTrackSample>&, double,
+  std::function<std::vector<core::TGroundTruthPoint>(const std::string&, const std::vector<core::TTrackSample>&, double,
                                                std::string&)>
       renderedTrackTruth;
 };

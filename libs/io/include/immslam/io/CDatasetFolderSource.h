@@ -23,7 +23,7 @@ struct TDatasetEntry
 };
 
 /** Reads a dataset folder: `rgb.txt` (`timestamp path` per line, `#` comments), optional
- * `calib.txt` (camera::loadCalibFile) and optional `groundtruth.txt` (TUM, eval::readTumTrajectory).
+ * `calib.txt` (camera::loadCalibFile) and optional `groundtruth.txt` (TUM, core::readTumTrajectory).
  *
  * rgb.txt, calib.txt and groundtruth.txt are parsed in the constructor; images are decoded lazily
  * by next() with `cv::imread(IMREAD_UNCHANGED)`:
@@ -45,7 +45,7 @@ class CDatasetFolderSource : public CImageSource
 
   ENextStatus next(TFrame& frame, std::string& why) override;
   camera::CCameraModel::Ptr calibration() const override { return m_calib; }
-  std::optional<eval::TTrajectory> groundTruth() const override { return m_gt; }
+  std::optional<core::TTrajectory> groundTruth() const override { return m_gt; }
   std::string describe() const override;
   /** Number of rgb.txt entries (malformed lines included: each gives one next() result). */
   std::size_t sizeHint() const override { return m_entries.size(); }
@@ -56,8 +56,6 @@ class CDatasetFolderSource : public CImageSource
   const std::string& folder() const { return m_folder; }
   /** Absolute-or-folder-relative path of an entry's image, as opened by next(). */
   std::string imagePath(const TDatasetEntry& e) const;
-  /** Restarts the stream at the first entry. */
-  void rewind() { m_cursor = 0; }
   /** Continues the stream at entry `index` (0-based rgb.txt entry; past the end: End). */
   void seek(std::size_t index) { m_cursor = index; }
 
@@ -66,7 +64,7 @@ class CDatasetFolderSource : public CImageSource
   std::string m_rgbTxt;
   std::vector<TDatasetEntry> m_entries;
   camera::CCameraModel::Ptr m_calib;
-  std::optional<eval::TTrajectory> m_gt;
+  std::optional<core::TTrajectory> m_gt;
   std::size_t m_cursor = 0;
 };
 

@@ -2,7 +2,7 @@
 #pragma once
 
 #include <immslam/camera/CCameraModel.h>
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 
 #include <opencv2/core/mat.hpp>
 
@@ -23,7 +23,7 @@ class CDatasetWriter
 
   /** Writes one image (grey or BGR) as rgb/NNNNNN.png and its rgb.txt line; if `gt` is given, the
    * groundtruth.txt line (timestamp of the frame). \return the relative path written. */
-  std::string addFrame(double timestamp, const cv::Mat& image, const eval::TStampedPose* gt = nullptr);
+  std::string addFrame(double timestamp, const cv::Mat& image, const core::TStampedPose* gt = nullptr);
 
   /** Flushes and closes the text files. */
   void close();

@@ -3,7 +3,7 @@
 #pragma once
 
 #include <immslam/camera/CCameraModel.h>
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 
 #include <opencv2/core/mat.hpp>
 
@@ -58,7 +58,7 @@ class CImageSource
   virtual camera::CCameraModel::Ptr calibration() const { return nullptr; }
 
   /** Ground-truth camera trajectory T_W_C, when the source has one (groundtruth.txt, GT poses). */
-  virtual std::optional<eval::TTrajectory> groundTruth() const { return std::nullopt; }
+  virtual std::optional<core::TTrajectory> groundTruth() const { return std::nullopt; }
 
   /** Short description for logs: "dataset folder ../shared/data/visp_rbt (99 frames)". */
   virtual std::string describe() const = 0;

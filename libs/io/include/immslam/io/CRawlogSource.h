@@ -64,7 +64,7 @@ class CRawlogSource : public CImageSource
 
   ENextStatus next(TFrame& frame, std::string& why) override;
   camera::CCameraModel::Ptr calibration() const override;
-  std::optional<eval::TTrajectory> groundTruth() const override;
+  std::optional<core::TTrajectory> groundTruth() const override;
   std::string describe() const override;
   std::size_t sizeHint() const override;
   bool endedOnDamage() const override;

@@ -18,9 +18,6 @@ class Bearing
 
   const Vec3& unitVector() const { return m_unit; }
 
-  /** (theta, phi) of this direction. */
-  Vec2 azimuthElevation() const { return AzimuthElevation(m_unit); }
-
   /** (theta, phi) of any non-zero vector v (scale invariant) and d(theta,phi)/dv (2x3). */
   static Vec2 AzimuthElevation(const Vec3& v, Mat23* J_v = nullptr);
 

@@ -156,9 +156,6 @@ class CRayClassifier
    * pose perturbation [dt; dtheta] of \f$ T_{0j} \f$ (6x6). */
   Vec6 viewRay(const TRayView& v, Eigen::Matrix<double, 6, 2>* J_L_uv = nullptr, Mat6* J_L_pose = nullptr) const;
 
-  /** \f$ \lambda_0 \f$ of the static decision. */
-  double requiredNoncentrality() const { return m_lambda0; }
-
  private:
   TRayClassifierParams m_p;
   camera::CCameraModel::Ptr m_cam;

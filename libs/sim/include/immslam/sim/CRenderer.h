@@ -67,9 +67,6 @@ class CRenderer
   /** Cached unit bearing (camera frame) of pixel (u, v). */
   const Vec3& bearing(int u, int v) const { return m_bearings[static_cast<std::size_t>(v) * m_w + u]; }
 
-  /** Cached angular size of pixel (u, v) (rad). */
-  double pixelAngle(int u, int v) const { return m_alpha[static_cast<std::size_t>(v) * m_w + u]; }
-
  private:
   struct TInstance;
   struct THit;

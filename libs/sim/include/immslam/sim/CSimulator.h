@@ -1,7 +1,7 @@
 /* imm-monoslam — a scenario ready to render: ground truth, labels, masks, images, dataset output. */
 #pragma once
 
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/sim/CCameraTrajectory.h>
 #include <immslam/sim/CRenderer.h>
 #include <immslam/sim/CWorld.h>
@@ -27,7 +27,7 @@ struct TSyntheticFrame
   /** CV_8UC1 object mask: 0 static world, k moving object k. */
   cv::Mat mask;
   /** T_W_C of the camera. */
-  eval::TStampedPose T_W_C;
+  core::TStampedPose T_W_C;
   EMotionLabel label = EMotionLabel::Stationary;
   /** T_W_O of every rendered moving object. */
   std::vector<TObjectPose> objects;
@@ -71,10 +71,10 @@ class CSimulator
   double timestamp(std::size_t k) const { return m_sc.start_time_s + m_traj.time(k); }
 
   /** T_W_C of frame k. */
-  eval::TStampedPose cameraPose(std::size_t k) const;
+  core::TStampedPose cameraPose(std::size_t k) const;
 
   /** Camera ground truth of the first n frames (0: all). */
-  eval::TTrajectory groundTruth(std::size_t n = 0) const;
+  core::TTrajectory groundTruth(std::size_t n = 0) const;
 
   /** The true motion over (t_{k-1}, t_k]. */
   EMotionLabel motionLabel(std::size_t k) const { return m_traj.label(k); }
@@ -95,7 +95,7 @@ class CSimulator
   std::optional<TRayHit> raycast(std::size_t k, const Vec2& uv) const;
 
   /** What the ray of pixel uv hits with the camera at T_W_C and the objects at `timestamp`. */
-  std::optional<TRayHit> raycast(const eval::TStampedPose& T_W_C, const Vec2& uv, double timestamp) const;
+  std::optional<TRayHit> raycast(const core::TStampedPose& T_W_C, const Vec2& uv, double timestamp) const;
 
   /** Writes the first n frames (0: all) as a dataset folder: rgb/, rgb.txt, calib.txt,
    * groundtruth.txt (T_W_C) through io::CDatasetWriter, plus motion_labels.txt, camera_velocity.txt,

@@ -29,7 +29,7 @@ class CSyntheticSource : public io::CImageSource
 
   io::ENextStatus next(io::TFrame& frame, std::string& why) override;
   camera::CCameraModel::Ptr calibration() const override { return m_sim->camera(); }
-  std::optional<eval::TTrajectory> groundTruth() const override { return m_sim->groundTruth(m_count); }
+  std::optional<core::TTrajectory> groundTruth() const override { return m_sim->groundTruth(m_count); }
   std::string describe() const override;
   std::size_t sizeHint() const override { return m_count; }
 

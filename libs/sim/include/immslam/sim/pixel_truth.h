@@ -2,7 +2,7 @@
  * position error of the shadow filter's tracks on the renderer's scenes). */
 #pragma once
 
-#include <immslam/eval/classification_truth.h>
+#include <immslam/core/point_tracks.h>
 #include <immslam/sim/CSimulator.h>
 
 #include <cstddef>
@@ -32,15 +32,15 @@ struct TPixelTruthStats
  * boundaryPx away in any of 8 directions hits another object or a depth differing by more than
  * depthStep (relative).
  * \param maxDt largest difference between a sample's timestamp and its frame's. */
-std::vector<eval::TGroundTruthPoint> truthAtPixels(const CSimulator& sim, const std::vector<eval::TTrackSample>& samples,
+std::vector<core::TGroundTruthPoint> truthAtPixels(const CSimulator& sim, const std::vector<core::TTrackSample>& samples,
                                                    double maxDt = 1e-4, double boundaryPx = 2.0,
                                                    double depthStep = 0.05, TPixelTruthStats* stats = nullptr);
 
 /** truthAtPixels() for a dataset folder written by imm-render: the simulator is rebuilt from the
  * folder's scenario.ini (the effective scenario it was rendered from).
  * \throws std::runtime_error naming the folder when it has no scenario.ini, or the scenario's error. */
-std::vector<eval::TGroundTruthPoint> truthAtPixelsOfRenderedFolder(const std::string& folder,
-                                                                   const std::vector<eval::TTrackSample>& samples,
+std::vector<core::TGroundTruthPoint> truthAtPixelsOfRenderedFolder(const std::string& folder,
+                                                                   const std::vector<core::TTrackSample>& samples,
                                                                    double maxDt = 1e-4,
                                                                    TPixelTruthStats* stats = nullptr);
 }  // namespace immslam::sim

@@ -2,7 +2,7 @@
  * objects (poses, inverse-depth ellipsoids, colours). */
 #pragma once
 
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/math/types.h>
 #include <immslam/viz/colours.h>
 #include <immslam/viz/scene.h>
@@ -13,7 +13,7 @@
 namespace immslam::viz
 {
 /** T_W_C of a stamped pose as an MRPT pose (same frames: W and the optical frame C). */
-mrpt::poses::CPose3D toMrptPose(const eval::TStampedPose& pose);
+mrpt::poses::CPose3D toMrptPose(const core::TStampedPose& pose);
 
 /** T_C_B: the MRPT "body" frame B (x forward, y left, z up) of a camera, expressed in its optical
  * frame C. MRPT objects that look along +X (CFrustum, ...) are placed at T_W_C (+) T_C_B.

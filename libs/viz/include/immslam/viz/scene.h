@@ -23,7 +23,7 @@
 #pragma once
 
 #include <immslam/camera/CCameraModel.h>
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 #include <immslam/math/types.h>
 #include <immslam/viz/colours.h>
 
@@ -81,10 +81,10 @@ struct TTrackView
 /** Everything one scene shows. All poses and points are in the world frame W. */
 struct TSceneContent
 {
-  std::vector<eval::TStampedPose> trajectory;                 ///< estimated T_W_C over time
-  std::optional<std::vector<eval::TStampedPose>> groundTruth; ///< drawn when present (aligned to W)
+  std::vector<core::TStampedPose> trajectory;                 ///< estimated T_W_C over time
+  std::optional<std::vector<core::TStampedPose>> groundTruth; ///< drawn when present (aligned to W)
   /** The camera drawn as a frustum; defaults to trajectory.back() (none if both are empty). */
-  std::optional<eval::TStampedPose> currentCamera;
+  std::optional<core::TStampedPose> currentCamera;
   camera::CCameraModel::Ptr camera;  ///< for the frustum's field of view (null: 60 x 45 deg)
   std::vector<TMapPointView> points; ///< map features
   std::vector<TTrackView> tracks;    ///< dynamic-feature tracks

@@ -1,5 +1,5 @@
 /* imm-monoslam — TUM trajectory files. */
-#include <immslam/eval/TTrajectory.h>
+#include <immslam/core/TTrajectory.h>
 
 #include <array>
 #include <charconv>
@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string_view>
 
-namespace immslam::eval
+namespace immslam::core
 {
 namespace
 {
@@ -115,4 +115,4 @@ std::vector<Vec3> trajectoryPositions(const TTrajectory& traj)
   for (const auto& p : traj) out.push_back(p.p_W_C);
   return out;
 }
-}  // namespace immslam::eval
+}  // namespace immslam::core

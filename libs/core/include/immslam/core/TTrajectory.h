@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace immslam::eval
+namespace immslam::core
 {
 /** One pose T_W_C: camera position p_W_C and orientation q_W_C = [qw qx qy qz] (math/quaternion.h). */
 struct TStampedPose
@@ -39,4 +39,4 @@ std::string formatTumLine(const TStampedPose& p);
 
 /** The positions p_W_C of a trajectory, in order. */
 std::vector<Vec3> trajectoryPositions(const TTrajectory& traj);
-}  // namespace immslam::eval
+}  // namespace immslam::core

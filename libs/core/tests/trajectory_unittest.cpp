@@ -1,0 +1,122 @@
+/* Tests: TUM trajectory files (core/TTrajectory.h): exact round trip, field order, comments,
+ * normalization, errors naming file and line. */
+#include <gtest/gtest.h>
+#include <immslam/core/TTrajectory.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <stdexcept>
+
+using namespace immslam;
+
+namespace
+{
+Vec4 randomQuat(std::mt19937& rng)
+{
+  std::normal_distribution<double> n;
+  return Vec4(n(rng), n(rng), n(rng), n(rng)).normalized();
+}
+Vec3 randomVec3(std::mt19937& rng, double s = 1.0)
+{
+  std::normal_distribution<double> n(0, s);
+  return Vec3(n(rng), n(rng), n(rng));
+}
+std::string tempPath(const std::string& name)
+{
+  return (std::filesystem::path(::testing::TempDir()) / ("immslam_core_" + name)).string();
+}
+void writeText(const std::string& path, const std::string& text)
+{
+  std::ofstream f(path);
+  f << text;
+}
+}  // namespace
+
+TEST(TumIO, RoundTripIsExact)
+{
+  std::mt19937 rng(1);
+  core::TTrajectory tr;
+  for (int k = 0; k < 50; ++k)
+  {
+    core::TStampedPose p;
+    p.timestamp = 1305031102.175304 + 0.033 * k;
+    p.p_W_C = randomVec3(rng, 10.0);
+    p.q_W_C = randomQuat(rng);
+    tr.push_back(p);
+  }
+  tr[3].p_W_C = Vec3(1e-12, -123456.789, 0.1);
+  const std::string path = tempPath("roundtrip.txt");
+  core::writeTumTrajectory(tr, path);
+  const core::TTrajectory back = core::readTumTrajectory(path);
+  ASSERT_EQ(back.size(), tr.size());
+  for (size_t k = 0; k < tr.size(); ++k)
+  {
+    EXPECT_NEAR(back[k].timestamp, tr[k].timestamp, 5e-7);
+    EXPECT_LT((back[k].p_W_C - tr[k].p_W_C).norm(), 1e-9);
+    // The read quaternion is re-normalized: equal to within rounding.
+    EXPECT_LT((back[k].q_W_C - tr[k].q_W_C).norm(), 1e-15);
+  }
+  EXPECT_EQ(back[3].p_W_C, tr[3].p_W_C);  // positions are bit exact
+}
+
+TEST(TumIO, FormatOrderCommentsAndNormalization)
+{
+  core::TStampedPose p;
+  p.timestamp = 12.5;
+  p.p_W_C = Vec3(1, -2, 0.5);
+  p.q_W_C = Vec4(0.5, 0.5, -0.5, 0.5);  // [qw qx qy qz]
+  EXPECT_EQ(core::formatTumLine(p), "12.500000 1 -2 0.5 0.5 -0.5 0.5 0.5");
+
+  const std::string path = tempPath("order.txt");
+  writeText(path, "# timestamp tx ty tz qx qy qz qw\n\n  \t\n1.0 1 2 3 0 0 0 2\r\n"
+                  "2.0,4,5,6,0,2,0,0\n  # indented comment\n3 +1 2e0 3 0 0 1 0\n");
+  const core::TTrajectory tr = core::readTumTrajectory(path);
+  ASSERT_EQ(tr.size(), 3u);
+  EXPECT_EQ(tr[0].q_W_C, Vec4(1, 0, 0, 0));  // qw = 2 normalized
+  EXPECT_EQ(tr[1].q_W_C, Vec4(0, 0, 1, 0));  // qy = 2 normalized
+  EXPECT_EQ(tr[1].p_W_C, Vec3(4, 5, 6));
+  EXPECT_EQ(tr[2].p_W_C, Vec3(1, 2, 3));
+  EXPECT_EQ(tr[2].q_W_C, Vec4(0, 0, 0, 1));
+  // Components near DBL_MAX: the norm must not overflow (found by fuzzing, tests/fuzz).
+  writeText(path, "1 0 0 0 1e308 1e308 0 1e308\n");
+  const core::TTrajectory big = core::readTumTrajectory(path);
+  EXPECT_NEAR(big[0].q_W_C.norm(), 1.0, 1e-15);
+  EXPECT_NEAR(big[0].q_W_C[0], 1 / std::sqrt(3.0), 1e-15);
+}
+
+TEST(TumIO, MalformedLineErrorNamesFileAndLine)
+{
+  const std::string path = tempPath("bad.txt");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"1 0 0 0 0 0 0 1\n# c\n2 0 0 0 0 0 1\n", ":3:"},             // 7 fields
+      {"1 0 0 0 0 0 0 1\n2 0 0 x 0 0 0 1\n", ":2:"},                // not a number
+      {"1 0 0 0 0 0 0 1 5\n", ":1:"},                               // 9 fields
+      {"\n\n1 0 0 0 0 0 0 0\n", ":3:"},                             // zero quaternion
+      {"1 0 0 nan 0 0 0 1\n", ":1:"},                               // not finite
+      {"1 0 0 0.5.5 0 0 0 1\n", ":1:"},                             // trailing junk
+  };
+  for (const auto& [text, where] : cases)
+  {
+    writeText(path, text);
+    try
+    {
+      core::readTumTrajectory(path);
+      ADD_FAILURE() << "no error for: " << text;
+    }
+    catch (const std::runtime_error& e)
+    {
+      EXPECT_NE(std::string(e.what()).find(path + where), std::string::npos) << e.what();
+    }
+  }
+  try
+  {
+    core::readTumTrajectory(tempPath("does_not_exist.txt"));
+    ADD_FAILURE() << "no error for a missing file";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("does_not_exist.txt"), std::string::npos);
+  }
+}
