@@ -66,7 +66,7 @@ void CSlamTracker::evictForRoom(int incoming)
   if (room >= incoming) return;
   std::vector<std::pair<std::int64_t, std::int64_t>> byAge;  // (lastSeenFrame, id)
   for (const auto& f : m_filter.features())
-    if (f.lastSeenFrame < m_report.frame) byAge.emplace_back(f.lastSeenFrame, f.id);
+    if (f.lastSeenFrame < m_filter.frame()) byAge.emplace_back(f.lastSeenFrame, f.id);
   std::sort(byAge.begin(), byAge.end());
   std::vector<std::int64_t> evict;
   for (std::size_t i = 0; i < byAge.size() && static_cast<int>(evict.size()) < incoming - room; ++i)

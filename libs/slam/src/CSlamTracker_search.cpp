@@ -116,7 +116,7 @@ void CSlamTracker::recordSearch(int k, const Vec2& h, const Mat2F& Jf, const Mat
 {
   TFeature& f = m_filter.featureRecord(k);
   f.nPredicted++;
-  f.lastSeenFrame = m_report.frame;
+  f.lastSeenFrame = m_filter.frame();
   ++m_report.nPredicted;
   TSearchRecord rec;
   rec.id = f.id;
@@ -178,7 +178,7 @@ std::vector<TCandidate> CSlamTracker::takeMeasurements(const std::vector<std::pa
     cands.push_back(c);
     TFeature& f = m_filter.featureRecord(c.feature);
     f.nPredicted++;
-    f.lastSeenFrame = m_report.frame;
+    f.lastSeenFrame = m_filter.frame();
   }
   m_report.nPredicted = m_report.nFound = static_cast<int>(cands.size());
   return cands;
