@@ -1,14 +1,14 @@
 /* imm-monoslam — options of the SLAM filter ([slam]) and of the IMM bank ([imm]). */
 #include <immslam/core/config.h>
 #include <immslam/math/chi2.h>
-#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/slam/CSlamTracker.h>
 
 #include <cmath>
 #include <sstream>
 
 namespace immslam::slam
 {
-void CMonoSlamIMM::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
+void CSlamTracker::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
   IMMSLAM_LOAD_DOUBLE(sigma_pixel);
   IMMSLAM_LOAD_BOOL(adaptive_pixel_noise);
@@ -51,7 +51,7 @@ void CMonoSlamIMM::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileB
   validate(s);
 }
 
-void CMonoSlamIMM::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
+void CSlamTracker::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
 {
   MRPT_SAVE_CONFIG_VAR_COMMENT(sigma_pixel, "image measurement noise std (px); the initial value if adaptive");
   MRPT_SAVE_CONFIG_VAR_COMMENT(adaptive_pixel_noise, "estimate the measurement noise online from post-fit residuals");
@@ -93,7 +93,7 @@ void CMonoSlamIMM::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, 
   MRPT_SAVE_CONFIG_VAR_COMMENT(seed, "random seed (1-point RANSAC)");
 }
 
-void CMonoSlamIMM::TOptions::validate(const std::string& s) const
+void CSlamTracker::TOptions::validate(const std::string& s) const
 {
   core::requirePositive(sigma_pixel, s, "sigma_pixel");
   core::requireInRange(adaptive_noise_rate, 0, 1, s, "adaptive_noise_rate");

@@ -2,7 +2,6 @@
  * mode of the IMM bank). */
 #pragma once
 
-#include <immslam/frontend/frontend.h>
 #include <immslam/math/types.h>
 
 #include <cstdint>
@@ -19,16 +18,16 @@ enum class EFeatureKind : std::uint8_t
 /** Size of a feature's block in the state vector. */
 constexpr int featureDim(EFeatureKind k) { return k == EFeatureKind::InverseDepth ? 6 : 3; }
 
-/** One map feature: where its block lives in the state, its appearance and its track record. */
+/** One map feature: where its block lives in the state and its track record. Its appearance (the
+ * template) is image work and lives with the tracker (CSlamTracker), keyed by id. */
 struct TFeature
 {
   std::int64_t id = -1;
   EFeatureKind kind = EFeatureKind::InverseDepth;
   int offset = 0;  ///< index of the first element of its block in the state vector (every mode)
 
-  frontend::CFeaturePatch patch;  ///< appearance at its first observation
-  Vec3 r0 = Vec3::Zero();         ///< camera centre when the patch was taken (for warping)
-  Vec4 q0 = Vec4(1, 0, 0, 0);     ///< camera orientation when the patch was taken
+  Vec3 r0 = Vec3::Zero();         ///< camera centre T_W_C at its first observation (patch warping)
+  Vec4 q0 = Vec4(1, 0, 0, 0);     ///< camera orientation at its first observation
 
   double tInit = 0;           ///< timestamp of the first observation
   std::int64_t frameInit = 0; ///< frame number of the first observation
