@@ -11,7 +11,14 @@
  * drift, recovery) is asserted per config at ~1.2x the value measured on 2026-11-27 (single /
  * imm7 / imm7-shadow, written beside each limit), so that a 20 % regression fails. The runs are
  * deterministic (same input, same output, any thread count) and use one rendered sequence each
- * (handheld.ini / handheld-moving.ini, seed 7): one measured value per config, no seed spread. */
+ * (handheld.ini / handheld-moving.ini, seed 7): the limits are that seed's. Over seeds the figures
+ * spread far more than 20 % (measured with scenario.seed = 11 / 23, first configs only: held ATE after
+ * the blackout, single 0.031 / 0.017 / 0.012 on seeds 7 / 11 / 23, imm7 0.011 / 0.025 / 0.011; blank
+ * start, single 0.83 / 5.26 / 1.23 % of path; held ATE after 10 dropped frames, single 0.034 / 0.028 /
+ * 0.010; still-camera drift, single 1.61 / 1.82 / 2.02 units, full system 1.56 / 2.54 units and 46 /
+ * 180 deg on seeds 7 / 11; kidnap recovery 6 / 6 / 7 frames). So a change that moves these seed-7
+ * figures by more than 20 % is to be re-measured over seeds before a limit is moved, never loosened to
+ * pass. */
 #include "robustness_helpers.h"
 
 #include <immslam/eval/ate.h>
