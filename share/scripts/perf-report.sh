@@ -5,7 +5,8 @@
 #
 # 1. builds Release (benchmarks on, tests off) in its own build folder;
 # 2. runs the Google Benchmark programs (tests/benchmarks): bench_filter, bench_frontend and
-#    bench_system, each benchmark repeated --reps times; the tables give the medians;
+#    bench_system, each benchmark repeated --reps times; the tables give the medians; bench_shadow
+#    (the shadow filter on images) and bench_sim (rendering) are run too, their results kept in OUT;
 # 3. memory: runs imm-monoslam on a long rendered run (ini/scenarios/handheld.ini lengthened to
 #    --long-frames frames) and samples its VmRSS every 0.5 s; peak RSS from /usr/bin/time;
 # 4. optionally (--profile) records a perf profile of the 7-model IMM on monoslam_testseq and on the
@@ -93,7 +94,8 @@ if [[ $BUILD_IT == 1 ]]; then
     -DIMMSLAM_BUILD_BENCHMARKS=ON > "$OUT/cmake.log"
   SIMD_TARGETS=(bench_simd_sse2)
   grep -qw avx2 /proc/cpuinfo && grep -qw fma /proc/cpuinfo && SIMD_TARGETS+=(bench_simd_avx2)
-  run cmake --build "$BUILD" --target bench_filter bench_frontend bench_system imm-monoslam "${SIMD_TARGETS[@]}" -j"$JOBS" \
+  run cmake --build "$BUILD" --target bench_filter bench_frontend bench_system bench_shadow bench_sim imm-monoslam \
+    "${SIMD_TARGETS[@]}" -j"$JOBS" \
     > "$OUT/build.log" 2>&1 || { tail -30 "$OUT/build.log" >&2; exit 1; }
 fi
 for p in bench_filter bench_frontend bench_system imm-monoslam; do
@@ -129,6 +131,11 @@ run "$BUILD/bin/bench_filter" "${BMARGS[@]}" ${BFILTER[@]+"${BFILTER[@]}"} --ben
 note_load "bench_frontend"
 run "$BUILD/bin/bench_frontend" "${BMARGS[@]}" ${BFILTER[@]+"${BFILTER[@]}"} --benchmark_out="$OUT/bench_frontend.json" \
   | tee "$OUT/bench_frontend.txt"
+for p in bench_shadow bench_sim; do
+  [[ -x "$BUILD/bin/$p" ]] || continue
+  note_load "$p"
+  run "$BUILD/bin/$p" "${BMARGS[@]}" ${BFILTER[@]+"${BFILTER[@]}"} --benchmark_out="$OUT/$p.json" | tee "$OUT/$p.txt"
+done
 for v in sse2 avx2; do
   [[ -x "$BUILD/bin/bench_simd_$v" ]] || continue
   [[ $v == avx2 ]] && ! { grep -qw avx2 /proc/cpuinfo && grep -qw fma /proc/cpuinfo; } && continue

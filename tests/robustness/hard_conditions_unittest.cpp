@@ -5,7 +5,20 @@
  * probabilities, symmetric positive semi-definite covariance (camera block every frame, the whole
  * fused covariance every 10th frame, every mode's every 30th). What the estimator does (ATE before
  * and after the event, matched features, recovery) is printed as one "[ result ]" line per run:
- * the figures of doc/reliability.md. */
+ * the figures of doc/reliability.md.
+ *
+ * Limits: every figure that judges the estimator (held ATE, ATE after the event, the largest step,
+ * drift, recovery) is asserted per config at ~1.2x the value measured on 2026-11-27 (single /
+ * imm7 / imm7-shadow, written beside each limit), so that a 20 % regression fails. The runs are
+ * deterministic (same input, same output, any thread count) and use one rendered sequence each
+ * (handheld.ini / handheld-moving.ini, seed 7): the limits are that seed's. Over seeds the figures
+ * spread far more than 20 % (measured with scenario.seed = 11 / 23, first configs only: held ATE after
+ * the blackout, single 0.031 / 0.017 / 0.012 on seeds 7 / 11 / 23, imm7 0.011 / 0.025 / 0.011; blank
+ * start, single 0.83 / 5.26 / 1.23 % of path; held ATE after 10 dropped frames, single 0.034 / 0.028 /
+ * 0.010; still-camera drift, single 1.61 / 1.82 / 2.02 units, full system 1.56 / 2.54 units and 46 /
+ * 180 deg on seeds 7 / 11; kidnap recovery 6 / 6 / 7 frames). So a change that moves these seed-7
+ * figures by more than 20 % is to be re-measured over seeds before a limit is moved, never loosened to
+ * pass. */
 #include "robustness_helpers.h"
 
 #include <immslam/eval/ate.h>
@@ -150,6 +163,16 @@ TRun runSystem(const std::string& config, const TSequence& seq, const TModifier&
   return run;
 }
 
+/** The limit of `cfg` among those of single.ini, imm7.ini and imm7-shadow.ini (kConfigs). */
+double perConfig(const std::string& cfg, double single, double imm7, double shadow)
+{
+  if (cfg == "ini/single.ini") return single;
+  if (cfg == "ini/imm7.ini") return imm7;
+  if (cfg == "ini/imm7-shadow.ini") return shadow;
+  ADD_FAILURE() << "no limit for " << cfg;
+  return 0;
+}
+
 /** Sub-trajectory of the processed frames whose rendered index is in [k0, k1). */
 std::pair<core::TTrajectory, core::TTrajectory> slice(const TRun& run, std::size_t k0, std::size_t k1)
 {
@@ -245,7 +268,7 @@ void expectContinuous(const TRun& run, std::size_t fed, double maxJumpFactor)
     maxTrue = std::max(maxTrue, (run.gt[i].p_W_C - run.gt[i - 1].p_W_C).norm());
     maxEst = std::max(maxEst, (a.sim3().transform(run.est[i].p_W_C) - a.sim3().transform(run.est[i - 1].p_W_C)).norm());
   }
-  std::printf("[ info     ] largest step: estimate %.4f, truth %.4f\n", maxEst, maxTrue);
+  std::printf("[ info     ] largest step: estimate %.4f, truth %.4f (ratio %.2f)\n", maxEst, maxTrue, maxEst / maxTrue);
   EXPECT_LE(maxEst, maxJumpFactor * maxTrue);
 }
 
@@ -273,12 +296,14 @@ TEST(RobustConditions, BlackFramesForTwoSecondsThenNormal)
     });
     ASSERT_FALSE(HasFailure());
     const auto f = figures("black 2 s, " + cfg, run, kEvent0, kEvent1);
-    expectContinuous(run, kFrames, 50);
+    // The blackout's predicted frames end in one jump back onto the map: largest step / largest true
+    // step measured 21.1 / 17.8 / 17.9.
+    expectContinuous(run, kFrames, perConfig(cfg, 25.3, 21.3, 21.5));
     EXPECT_LE(f.matchedDuring, 2);      // nothing to match in black frames
-    EXPECT_GE(f.matchedAfter, 5);       // tracking resumes on the normal frames
+    EXPECT_GE(f.matchedAfter, 24);      // tracking resumes on the normal frames (29 / 30 / 32)
     // The map is kept through the blackout and found again ([slam] relocalise): the trajectory goes on
-    // in the frame and scale of before (held ATE 0.03 / 0.009 measured; 3.5 / 0.19 without).
-    EXPECT_LT(f.ateAfterHeld, 0.1);
+    // in the frame and scale of before (held ATE 0.0314 / 0.0108 / 0.0355 measured; 3.5 / 0.19 without).
+    EXPECT_LT(f.ateAfterHeld, perConfig(cfg, 0.038, 0.013, 0.043));
     EXPECT_GE(f.recoveryFrames, 0);
     EXPECT_LE(f.recoveryFrames, 2);
   }
@@ -310,8 +335,9 @@ TEST(RobustConditions, BlankStartThenNormal)
     std::printf("[ result   ] blank start (%zu frames), %-16s matched at frame %zu: %d | ATE after the blank %.4f = "
                 "%.2f %% of path\n",
                 blank, cfg.c_str(), blank + 1, run.matched[blank + 1], a.rmse, 100 * a.rmseOverPath);
-    EXPECT_LT(a.rmseOverPath, 0.03);
-    expectContinuous(run, kFrames, 50);
+    // Measured on this seed (7) 0.83 / 2.30 / 2.02 % of path; largest step ratio 8.9 / 14.6 / 12.9.
+    EXPECT_LT(a.rmseOverPath, perConfig(cfg, 0.010, 0.0276, 0.0243));
+    expectContinuous(run, kFrames, perConfig(cfg, 10.7, 17.6, 15.5));
   }
 }
 
@@ -333,8 +359,11 @@ TEST(RobustConditions, TexturelessFramesForTwoSecondsThenNormal)
     });
     ASSERT_FALSE(HasFailure());
     const auto f = figures("textureless 2 s, " + cfg, run, kEvent0, kEvent1);
-    expectContinuous(run, kFrames, 50);
-    EXPECT_GE(f.matchedAfter, 5);
+    // Measured: the same figures as the blackout's (no corner is found in the noise either).
+    expectContinuous(run, kFrames, perConfig(cfg, 25.3, 21.3, 21.5));
+    EXPECT_LE(f.matchedDuring, 2);
+    EXPECT_GE(f.matchedAfter, 24);
+    EXPECT_LT(f.ateAfterHeld, perConfig(cfg, 0.038, 0.013, 0.043));
   }
 }
 
@@ -355,11 +384,13 @@ TEST(RobustConditions, ExposureJumpAndMotionBlur)
     ASSERT_FALSE(HasFailure());
     const auto fx = figures("exposure jump 1 s, " + cfg, run, x0, x1);
     const auto fb = figures("motion blur 1 s, " + cfg, run, b0, b1);
-    expectContinuous(run, kFrames, 50);
-    EXPECT_LT(fx.ateAfterHeld, 0.1);
-    EXPECT_LT(fb.ateAfterHeld, 0.1);
-    EXPECT_GE(fx.matchedDuring, 3);
-    EXPECT_GE(fb.matchedDuring, 3);
+    // Measured: largest step ratio 2.9 / 6.7 / 7.0; held ATE after the exposure jump 0.0602 / 0.0244 /
+    // 0.0200, after the blur 0.0184 / 0.0104 / 0.0135; matched during 14 / 14 / 19 and 18 / 17 / 19.
+    expectContinuous(run, kFrames, perConfig(cfg, 3.5, 8.1, 8.5));
+    EXPECT_LT(fx.ateAfterHeld, perConfig(cfg, 0.072, 0.029, 0.024));
+    EXPECT_LT(fb.ateAfterHeld, perConfig(cfg, 0.022, 0.0125, 0.0162));
+    EXPECT_GE(fx.matchedDuring, 11);
+    EXPECT_GE(fb.matchedDuring, 14);
   }
 }
 
@@ -388,7 +419,7 @@ TEST(RobustConditions, KidnappedIntoAnUnmappedSceneStartsANewMap)
     std::printf("[ result   ] kidnapped at frame %zu, %-16s tracking (>= 10 matches) resumed after %ld frames\n", kidnap,
                 cfg.c_str(), resumed);
     EXPECT_GE(resumed, 0);
-    EXPECT_LE(resumed, 15);
+    EXPECT_LE(resumed, 7);  // measured 6 / 6 / 6 frames
   }
 }
 
@@ -401,8 +432,11 @@ TEST(RobustConditions, TenDroppedFrames)
     const TRun run = runSystem(cfg, handheld(), [](std::size_t k, cv::Mat&, const cv::Mat&) { return k < g0 || k >= g1; });
     ASSERT_FALSE(HasFailure());
     const auto f = figures("10 dropped frames, " + cfg, run, g0, g1);
-    expectContinuous(run, kFrames - 10, 20);
-    EXPECT_GE(f.matchedAfter, 0.5 * f.matchedBefore);
+    // The step over the gap is the true one (ratio 0.96 / 0.98 / 0.99 measured); held ATE 0.0344 /
+    // 0.0186 / 0.0239.
+    expectContinuous(run, kFrames - 10, 1.2);
+    EXPECT_GE(f.matchedAfter, 0.8 * f.matchedBefore);
+    EXPECT_LT(f.ateAfterHeld, perConfig(cfg, 0.041, 0.0223, 0.0287));
   }
 }
 
@@ -416,9 +450,10 @@ TEST(RobustConditions, HundredDroppedFrames)
     ASSERT_FALSE(HasFailure());
     const auto f = figures("100 dropped frames, " + cfg, run, g0, g1);
     EXPECT_EQ(run.est.size(), kFrames - 100);
-    // The frame after the gap is relocalised on the map (held ATE 0.024 / 0.015 measured; 11.6 / 3.5
-    // when the motion models' extrapolation over the gap was searched).
-    EXPECT_LT(f.ateAfterHeld, 0.1);
+    // The frame after the gap is relocalised on the map (held ATE 0.0240 / 0.0174 / 0.0177 measured;
+    // 11.6 / 3.5 when the motion models' extrapolation over the gap was searched).
+    EXPECT_LT(f.ateAfterHeld, perConfig(cfg, 0.029, 0.021, 0.0213));
+    EXPECT_EQ(f.recoveryFrames, 0);
   }
 }
 
@@ -442,9 +477,12 @@ TEST(RobustConditions, VeryFastRotation)
     ASSERT_FALSE(HasFailure());
     const auto f = figures("fast rotation, " + cfg, run, 60, 120);
     EXPECT_EQ(run.est.size(), seq.frames.size());
-    // Lost in the fast motion after the rotation, found again by relocalisation (held ATE 0.12 / 0.08
-    // measured; 2.4 / 4.2 when the map was deleted and rebuilt at another scale).
-    EXPECT_LT(f.ateAfterHeld, 0.3);
+    // Lost in the fast motion after the rotation, found again by relocalisation (held ATE 0.0415 /
+    // 0.0475 / 0.0853 measured; 2.4 / 4.2 when the map was deleted and rebuilt at another scale);
+    // recovered after 1 / 0 / 3 frames; whole run 0.0202 / 0.0188 / 0.0195.
+    EXPECT_LT(f.ateAfterHeld, perConfig(cfg, 0.050, 0.057, 0.103));
+    EXPECT_LE(f.recoveryFrames, 4);
+    EXPECT_LT(f.ateAll, perConfig(cfg, 0.0243, 0.0226, 0.0234));
   }
 }
 
@@ -474,9 +512,12 @@ TEST(RobustConditions, MostMatchesOnAMovingObject)
     }
     std::printf("[ info     ] %s: %zu frames with > 50 %% of the matches on moving objects (frames %zu-%zu), peak %.0f %%\n",
                 cfg.c_str(), most, first, last, 100 * peak);
-    figures("moving object, " + cfg, run, most ? first : kFrames, most ? last + 1 : kFrames);
+    const auto f = figures("moving object, " + cfg, run, most ? first : kFrames, most ? last + 1 : kFrames);
     EXPECT_GT(most, 0u) << "the scenario should put most matches on the object for a while";
-    expectContinuous(run, kFrames, 50);
+    // Measured: largest step ratio 0.53 / 0.39 / 1.28; ATE of the whole run 0.1714 / 0.1654 / 0.1510
+    // (the slab drags every config: doc/reliability.md).
+    expectContinuous(run, kFrames, perConfig(cfg, 0.64, 0.47, 1.54));
+    EXPECT_LT(f.ateAll, perConfig(cfg, 0.206, 0.199, 0.182));
   }
 }
 
@@ -515,6 +556,18 @@ TEST(RobustConditions, StillCameraWatchingOnlyMovingObjects)
                 cfg.c_str(), run.est.size(), maxPos, maxRotDeg, medianOf(run.matched, run, 0, 1000),
                 100 * eval::median(run.onObjects), domText.c_str(), run.pendingWeight);
     EXPECT_EQ(run.est.size(), seq.frames.size());
+    // The drift of the still camera, at ~1.2x the measured values (2026-11-27): max |r| 1.612 /
+    // 1.781 / 1.563 units, max rotation 179.5 / 159.7 / 45.6 deg (35 units with outlier rejection
+    // off, issue 30). The single model's rotation has already reached 180 deg (turned around): only
+    // its position is bounded; imm7's is held below 170 deg (1.2x would pass 180). The scenario itself: 91 / 93 / 100 % of the matches on the boxes,
+    // median 11 / 11 / 5 matched.
+    EXPECT_LT(maxPos, perConfig(cfg, 1.94, 2.14, 1.88));
+    if (cfg != "ini/single.ini")
+    {
+      EXPECT_LT(maxRotDeg, cfg == "ini/imm7.ini" ? 170.0 : 55.0);
+    }
+    EXPECT_GE(eval::median(run.onObjects), 0.85);
+    EXPECT_GE(medianOf(run.matched, run, 0, 1000), perConfig(cfg, 9, 9, 4));
   }
 }
 

@@ -97,10 +97,18 @@ TEST(IMMPaper, RenderedPaperScenarioReproducesTheClaims)
               areaRatio, imm.probs[0].back().c_str(), static_cast<double>(lowGeneral) / n,
               100 * imm.summary.ate->rmseOverPath, 100 * single.summary.ate->rmseOverPath, medianMs(imm),
               medianMs(single), medianMs(imm) / medianMs(single));
-  EXPECT_GE(segmentation, 0.9);
-  EXPECT_LE(knownShare(imm), 0.05);
-  EXPECT_LE(areaRatio, 0.5);
-  EXPECT_GT(static_cast<double>(lowGeneral) / n, 0.5);
+  // Limits at ~1.2x the figures measured on this scenario (seed 7) on 2026-11-27 (errors at most 1.2x,
+  // shares at most 1.2x further from their ideal): segmentation 0.996; known depth IMM 0.000, single
+  // 1.000; search-area ratio 0.079; most general model < 0.05 on 0.997 of frames; ATE IMM 0.542 %,
+  // single 1.351 % of path. Other seeds (imm-render --seed S, imm-monoslam): area ratio 0.078 / 0.070,
+  // ATE IMM 1.15 / 0.52 %, single 1.87 / 1.49 % (seeds 11 / 23).
+  EXPECT_GE(segmentation, 0.995);
+  EXPECT_LE(knownShare(imm), 0.01);    // the IMM does not claim depth from the rotation start ...
+  EXPECT_GE(knownShare(single), 0.8);  // ... the single model does (the contrast of Fig. 3)
+  EXPECT_LE(areaRatio, 0.095);
+  EXPECT_GT(static_cast<double>(lowGeneral) / n, 0.996);
+  EXPECT_LE(imm.summary.ate->rmseOverPath, 0.0065);
+  EXPECT_LE(single.summary.ate->rmseOverPath, 0.0162);
   EXPECT_LE(imm.summary.ate->rmse, single.summary.ate->rmse);
 }
 
@@ -128,5 +136,6 @@ TEST(IMMPaper, EurocCameraAtRestIsStationary)
   // the stationary model explain it, while a rotation model, which has the same shake, has nothing to
   // add (doc/imm.md).
   EXPECT_EQ(ok, counted);
-  EXPECT_GE(minP, 0.9);
+  // Measured min 0.962 (2026-11-27): the stationary family's shortfall from 1 (0.038) at most 1.2x.
+  EXPECT_GE(minP, 0.954);
 }

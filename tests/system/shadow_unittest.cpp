@@ -47,9 +47,13 @@ TEST(ShadowSystem, MonoslammotSynth19ClassificationAgainstPointGroundTruth)
               "ATE %.3f %% of path\n",
               c.dynamicAsStatic, c.trulyDynamic(), c.movingAsStaticRate(), c.staticAsDynamic, c.trulyStatic(),
               c.staticAsDynamicRate(), res.unmatched, 100 * s.ate->rmseOverPath);
-  EXPECT_GE(c.trulyDynamic(), 10u);
+  // Limits at ~1.2x the measured figures (2026-11-27): moving->static 0 of 31, static->dynamic 2 of
+  // 129 (1.6 %), ATE 0.556 % of path.
+  EXPECT_GE(c.trulyDynamic(), 26u);
   EXPECT_LE(c.movingAsStaticRate(), 0.01);
-  EXPECT_LE(c.staticAsDynamicRate(), 0.05);
+  EXPECT_LE(c.staticAsDynamicRate(), 0.019);
+  ASSERT_TRUE(s.ate);
+  EXPECT_LE(s.ate->rmseOverPath, 0.0067);
 }
 
 TEST(ShadowSystem, KnownAssociationReproducesFig5OnSynth19)
@@ -102,9 +106,17 @@ TEST(ShadowSystem, KnownAssociationReproducesFig5OnSynth19)
   {
     EXPECT_LE(ate[cfg + "-all"], 0.75 * ate["single-static"]) << cfg;
     const auto& c = conf[cfg + "-all"];
-    EXPECT_GE(c.trulyDynamic(), 30u) << cfg;
+    EXPECT_GE(c.trulyDynamic(), 40u) << cfg;  // measured 50 / 52
     EXPECT_LE(c.movingAsStaticRate(), 0.01) << cfg;
   }
+  // Absolute limits at ~1.2x the measured figures (2026-11-27): (a) 2.04 %, (b) 8.30 % of path; (c)
+  // single-shadow 0.77 % (static points only 0.79 %), imm7-shadow 1.10 % (0.79 %); static points
+  // called dynamic 3 of 138 (single-shadow) and 28 of 143 (imm7-shadow).
+  EXPECT_LE(ate["single-static"], 0.0245);
+  EXPECT_LE(ate["single-shadow-all"], 0.0093);
+  EXPECT_LE(ate["imm7-shadow-all"], 0.0132);
+  EXPECT_LE(conf["single-shadow-all"].staticAsDynamicRate(), 0.027);
+  EXPECT_LE(conf["imm7-shadow-all"].staticAsDynamicRate(), 0.235);
 }
 
 TEST(ShadowSystem, RenderedMovingObjectsDoNotCorruptTheMap)
@@ -144,10 +156,16 @@ TEST(ShadowSystem, RenderedMovingObjectsDoNotCorruptTheMap)
               withShadow.ate->rmse / still.ate->rmse, 100 * noShadow.ate->rmseOverPath,
               100 * singleMoving.ate->rmseOverPath, 100 * singleStill.ate->rmseOverPath);
   EXPECT_EQ(c.dynamicAsStatic, 0u);
-  EXPECT_LE(c.staticAsDynamicRate(), 0.05);
-  // This seed (7) alone: 1.17 % with the shipped bank (imm.general_entry = evidence; 0.74 % with
-  // "markov", which is worse on average: doc/imm.md). The accuracy claim is tested over five seeds below.
-  EXPECT_LE(withShadow.ate->rmseOverPath, 0.015);
+  EXPECT_LE(c.staticAsDynamicRate(), 0.05);  // measured 0 of 30
+  // This seed (7) alone, limits at ~1.2x the figures measured 2026-11-27: full system 0.892 % with the
+  // moving objects, 0.872 % without; IMM without shadow filter 1.032 %; the single model 1.926 % with
+  // them, 0.770 % without. The five-seed spread of the full system is in the test below.
+  EXPECT_GE(c.trulyDynamic(), 3u);
+  EXPECT_LE(withShadow.ate->rmseOverPath, 0.0107);
+  EXPECT_LE(still.ate->rmseOverPath, 0.0105);
+  EXPECT_LE(noShadow.ate->rmseOverPath, 0.0124);
+  EXPECT_LE(singleMoving.ate->rmseOverPath, 0.0232);
+  EXPECT_LE(singleStill.ate->rmseOverPath, 0.0093);
 }
 
 TEST(ShadowSystem, MovingObjectsOverFiveSeeds)
@@ -182,7 +200,10 @@ TEST(ShadowSystem, MovingObjectsOverFiveSeeds)
     std::printf("seed %d: full system ATE %.3f %% of path without moving objects, %.3f %% with; refined %.3f %%, "
                 "%.3f %%\n",
                 seed, 100 * ate[0], 100 * ate[1], 100 * refined[0], 100 * refined[1]);
-    EXPECT_LE(ate[1], 0.015) << "seed " << seed;
+    // ~1.2x each seed's measured ATE with moving objects (2026-11-27): seeds 7 / 11 / 23 / 42 / 101:
+    // 0.892 / 1.086 / 1.030 / 0.572 / 0.920 % (without them 0.872 / 0.839 / 0.534 / 0.417 / 0.720 %).
+    static const std::map<int, double> limit{{7, 0.0107}, {11, 0.0131}, {23, 0.0124}, {42, 0.0069}, {101, 0.0111}};
+    EXPECT_LE(ate[1], limit.at(seed)) << "seed " << seed;
     EXPECT_LT(refined[1], ate[1]) << "seed " << seed;
     sumStill += ate[0];
     sumMoving += ate[1];
@@ -194,10 +215,13 @@ TEST(ShadowSystem, MovingObjectsOverFiveSeeds)
               "%.3f %% (ratio %.2f)\n",
               seeds.size(), 100 * sumStill / n, 100 * sumMoving / n, sumMoving / sumStill, 100 * sumStillRefined / n,
               100 * sumMovingRefined / n, sumMovingRefined / sumStillRefined);
-  EXPECT_LE(sumMoving / n, 0.01);
-  EXPECT_LE(sumMoving / sumStill, 1.6);  // measured 1.47 (the paper's claim, <= 1.2, is not met: doc/shadow.md)
-  // The refined trajectories: measured 0.202 % and 0.208 % (ratio 1.03).
-  EXPECT_LE(sumMovingRefined / n, 0.004);
+  // Measured 2026-11-27: mean 0.676 % without, 0.900 % with (ratio 1.33; the paper's claim, <= 1.2,
+  // is not met: doc/shadow.md); refined 0.192 % and 0.193 % (ratio 1.00). Limits ~1.2x.
+  EXPECT_LE(sumMoving / n, 0.0108);
+  EXPECT_LE(sumStill / n, 0.0081);
+  EXPECT_LE(sumMoving / sumStill, 1.6);
+  EXPECT_LE(sumMovingRefined / n, 0.0023);
+  EXPECT_LE(sumStillRefined / n, 0.0023);
   EXPECT_LE(sumMovingRefined / sumStillRefined, 1.2);
 }
 
@@ -248,8 +272,9 @@ TEST(ShadowSystem, ExclusionMasksDisableTheMovingObjectsAsInFig5a)
   EXPECT_GT(res.confusion.trulyDynamic(), 0u);
   std::printf("seed 7 with the moving objects disabled (Fig. 5(a)): IMM %.3f %% of path, full system %.3f %%\n",
               100 * ate["imm7.ini"], 100 * ate["imm7-shadow.ini"]);
-  EXPECT_LE(ate["imm7.ini"], 0.015);
-  EXPECT_LE(ate["imm7-shadow.ini"], 0.015);
+  // Measured 2026-11-27: IMM 1.095 %, full system 0.804 % of path; limits ~1.2x.
+  EXPECT_LE(ate["imm7.ini"], 0.0131);
+  EXPECT_LE(ate["imm7-shadow.ini"], 0.0097);
 }
 
 TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
@@ -334,12 +359,15 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
               100 * mean(deviations), 100 * median(deviations), 100 * mean(deviationsNoShadow),
               100 * median(deviationsNoShadow), tsPooled.dynamicAsStatic, tsPooled.trulyDynamic(), tsPooled.staticAsDynamic,
               tsPooled.trulyStatic());
-  // Measured: full system 0.14 2.42 0.17 0.11 1.62 % (mean 0.89 %); without the shadow filter
-  // 2.36 2.32 1.96 2.32 2.41 % (mean 2.28 %). The claim (paper 2, Fig. 5): the shadow filter keeps the
-  // objects out of the estimate; it does so in 3 of 5 variations, the IMM alone in none.
+  // Measured 2026-11-27: full system 0.346 2.410 1.366 0.189 2.182 % (mean 1.299 %); without the
+  // shadow filter 2.087 2.297 1.571 1.262 2.194 % (mean 1.882 %); moving->static 1 of 363, static->dynamic
+  // 643 of 1155. The claim (paper 2, Fig. 5): the shadow filter keeps the objects out of the estimate;
+  // it does so clearly in 2 of 5 variations. Limits ~1.2x the measured figures.
   EXPECT_LE(mean(deviations), 0.75 * mean(deviationsNoShadow));
-  EXPECT_GE(tsPooled.trulyDynamic(), 100u);
-  EXPECT_LE(tsPooled.movingAsStaticRate(), 0.01);  // measured 1 of 200
+  EXPECT_LE(mean(deviations), 0.0156);
+  EXPECT_GE(tsPooled.trulyDynamic(), 302u);
+  EXPECT_LE(tsPooled.movingAsStaticRate(), 0.0034);
+  EXPECT_LE(tsPooled.staticAsDynamicRate(), 0.67);
 
   // visp_rbt (AprilTag ground truth): a desk cut-out crossing the whole image (13 % on average).
   const std::string desk = sharedData("monoslam_testseq") + "/rgb/000500.png";
@@ -368,11 +396,13 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
               100 * median(ates), 100 * *std::min_element(ates.begin(), ates.end()),
               100 * *std::max_element(ates.begin(), ates.end()), 100 * clean.ate->rmseOverPath, viPooled.dynamicAsStatic,
               viPooled.trulyDynamic(), viPooled.staticAsDynamic, viPooled.trulyStatic());
-  // Measured: 1.86 2.34 1.78 2.31 1.80 % (median 1.86) vs 1.96 %; the clean sequence itself gives
-  // 1.88-3.05 % over start-up variations (doc/shadow.md).
-  EXPECT_LE(median(ates), 1.5 * clean.ate->rmseOverPath);
-  EXPECT_GE(viPooled.trulyDynamic(), 50u);
-  EXPECT_LE(viPooled.movingAsStaticRate(), 0.01);  // measured 0 of 117
+  // Measured 2026-11-27: median 1.986 % (1.816-2.332) vs 1.938 % on the clean sequence (ratio 1.02);
+  // the clean sequence itself gives 1.88-3.05 % over start-up variations (doc/shadow.md); moving->static
+  // 0 of 144 (static->dynamic 147 of 154: the desk's background corners mix both). Limits ~1.2x.
+  EXPECT_LE(median(ates), 1.23 * clean.ate->rmseOverPath);
+  EXPECT_LE(median(ates), 0.0238);
+  EXPECT_GE(viPooled.trulyDynamic(), 120u);
+  EXPECT_LE(viPooled.movingAsStaticRate(), 0.01);
 }
 
 namespace
@@ -480,12 +510,14 @@ TEST(ShadowSystem, RealVideoOfAHandMovingABoxInFrontOfAStillCamera)
   // Measured: rotation RMSE 1.97 / 0.27 / 34.9 deg; stationary 82 % / 33 % of the frames (the IMM
   // without shadow filter explains the box with general motion and a map at infinity); 82 dynamic and
   // 2 static decisions, moving->static 2 of 73 against the masks.
-  EXPECT_LT(full.rotationRmseDeg, 4.0);
+  // Measured 2026-11-27: full system rotation RMSE 1.958 deg, segmentation 80.7 %, moving->static 2 of
+  // 74; IMM without shadow filter 0.267 deg, 33.0 %; single model 34.9 deg. Limits ~1.2x (errors).
+  EXPECT_LT(full.rotationRmseDeg, 2.35);
   EXPECT_GT(single.rotationRmseDeg, 10.0) << "the single model follows the box: the test must see that failure";
-  EXPECT_GT(full.segmentation, 0.7);
+  EXPECT_GT(full.segmentation, 0.768);
   EXPECT_GT(full.segmentation, noShadow.segmentation + 0.3);
-  EXPECT_GE(full.decisions.trulyDynamic(), 50u);
-  EXPECT_LE(full.decisions.movingAsStaticRate(), 0.05);
+  EXPECT_GE(full.decisions.trulyDynamic(), 61u);
+  EXPECT_LE(full.decisions.movingAsStaticRate(), 0.033);
 }
 
 TEST(ShadowSystem, RealVideoOfPeopleWalkingSeenByARotatingCamera)
@@ -499,9 +531,10 @@ TEST(ShadowSystem, RealVideoOfPeopleWalkingSeenByARotatingCamera)
   const TRealVideoRun full = runRealVideo("imm7-shadow", folder);
   const TRealVideoRun single = runRealVideo("single", folder);
   // Measured over 795 frames: 0.009 deg (IMM) and 0.33 deg (single model), the rotation family 100 %.
-  EXPECT_LT(full.rotationRmseDeg, 0.1);
+  // Measured 2026-11-27: full system 0.009 deg, segmentation 100 %; single model 0.140 deg.
+  EXPECT_LT(full.rotationRmseDeg, 0.011);
   EXPECT_LT(full.rotationRmseDeg, single.rotationRmseDeg);
-  EXPECT_GT(full.segmentation, 0.95);
+  EXPECT_GT(full.segmentation, 0.99);
   EXPECT_LE(full.decisions.dynamicAsStatic, 0u) << "nothing moving enters the map";
 }
 
@@ -559,11 +592,13 @@ TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)
               "%.3f %%; moving->static %zu/%zu, static->dynamic %zu/%zu\n",
               100 * mean(deviation["imm7-shadow"]), 100 * mean(deviation["imm7"]), 100 * mean(deviation["single"]),
               pooled.dynamicAsStatic, pooled.trulyDynamic(), pooled.staticAsDynamic, pooled.trulyStatic());
-  // Measured: full system 0.24 / 0.13 / 0.47 % (IMM without shadow filter 1.21 / 0.55 / 2.74 %, single
-  // model 0.82 / 0.37 / 0.53 %); none of 108 decisions on the hand and the box static.
+  // Measured 2026-11-27: full system 0.139 / 0.097 / 0.139 % (mean 0.125 %; IMM without shadow filter
+  // 1.182 / 0.568 / 2.192 %, single model 0.835 / 0.406 / 0.527 %); none of 81 decisions on the hand and
+  // the box static; static->dynamic 43 of 332. Limits ~1.2x.
   EXPECT_LE(mean(deviation["imm7-shadow"]), 0.5 * mean(deviation["imm7"]));
   EXPECT_LE(mean(deviation["imm7-shadow"]), mean(deviation["single"]));
-  EXPECT_LT(mean(deviation["imm7-shadow"]), 0.006);
-  EXPECT_GE(pooled.trulyDynamic(), 60u);
+  EXPECT_LT(mean(deviation["imm7-shadow"]), 0.0015);
+  EXPECT_GE(pooled.trulyDynamic(), 67u);
   EXPECT_LE(pooled.movingAsStaticRate(), 0.01);
+  EXPECT_LE(pooled.staticAsDynamicRate(), 0.156);
 }

@@ -21,6 +21,8 @@ using namespace immslam::test;
 
 TEST(SystemSynthetic, HandheldSingleModelAteWithinOnePercentOfPath)
 {
+  // handheld.ini (seed 7), single model. Measured 2026-11-27 (imm-render --seed S + imm-monoslam):
+  // 0.77 % of path on seed 7 (this test), 0.79 % on 11, 0.57 % on 23. Limit 1.2x seed 7's.
   app::TRunSummary s;
   ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", "--out", outDir("handheld_single"), "--set",
                     "input.scenario=scenarios/handheld.ini", "--set", "output.plots=false"},
@@ -30,7 +32,7 @@ TEST(SystemSynthetic, HandheldSingleModelAteWithinOnePercentOfPath)
   std::printf("handheld single: ATE %.4f = %.3f %% of path (%zu poses)\n", s.ate->rmse, 100 * s.ate->rmseOverPath,
               s.ate->nPairs);
   EXPECT_EQ(s.framesProcessed, s.ate->nPairs);
-  EXPECT_LE(s.ate->rmseOverPath, 0.01);
+  EXPECT_LE(s.ate->rmseOverPath, 0.0092);
 }
 
 TEST(SystemSynthetic, FisheyeLensDefaultConfigAteWithinOnePercentOfPath)
@@ -38,6 +40,8 @@ TEST(SystemSynthetic, FisheyeLensDefaultConfigAteWithinOnePercentOfPath)
   // The hand-held path through the TUM-VI fisheye lens (190 degrees along the diagonal, black corners),
   // with the default configuration: the camera model is used end to end (search, warps, inverse depth,
   // shadow filter, relocalisation) and the lens mask keeps new features inside the image circle.
+  // ATE measured 2026-11-27: 0.43 % of path on seed 7 (this test), 0.20 % on 11, 0.27 % on 23; limit
+  // 1.2x seed 7's.
   app::TRunSummary s;
   const std::string out = outDir("handheld_fisheye");
   ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", "--out", out, "--set",
@@ -49,7 +53,7 @@ TEST(SystemSynthetic, FisheyeLensDefaultConfigAteWithinOnePercentOfPath)
   std::printf("handheld fisheye, full system: ATE %.4f = %.3f %% of path (%zu poses)\n", s.ate->rmse,
               100 * s.ate->rmseOverPath, s.ate->nPairs);
   EXPECT_EQ(s.framesProcessed, s.ate->nPairs);
-  EXPECT_LE(s.ate->rmseOverPath, 0.01);
+  EXPECT_LE(s.ate->rmseOverPath, 0.0051);
   // Every measurement lies inside the image circle (radius f * 90 degrees about the principal point).
   const auto rows = readCsv(out + "/searches.csv");
   ASSERT_GT(rows.size(), 1000u);
@@ -79,16 +83,21 @@ TEST(SystemRealData, VispRbtAteWithinThreePercentOfPath)
   ASSERT_TRUE(s.ate.has_value());
   std::printf("visp_rbt single: ATE %.4f = %.3f %% of path\n", s.ate->rmse, 100 * s.ate->rmseOverPath);
   EXPECT_EQ(s.framesProcessed, 99u);
-  EXPECT_LE(s.ate->rmseOverPath, 0.03);
+  // Measured 1.898 % (2026-11-27; one real sequence): limit 1.2x. (The AprilTag poses themselves lie
+  // 1.75 % of path from a bundle adjustment of the images: see the test below.)
+  EXPECT_LE(s.ate->rmseOverPath, 0.0228);
 }
 
 TEST(SystemRealData, MonoslamTestseqTrackedEndToEndWithoutKnownTarget)
 {
+  // The single model over the 1000 real frames (no ground truth): never lost, and the trajectory
+  // explains the run's own matches: the features triangulated from the estimated poses reproject onto
+  // their measurements (a wrong trajectory cannot place one point per feature that fits every view).
   if (!haveSharedData("monoslam_testseq")) GTEST_SKIP() << "../shared/data/monoslam_testseq is absent";
   app::TRunSummary s;
   const auto out = outDir("testseq_single");
   ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", sharedData("monoslam_testseq"), "--out", out, "--set",
-                    "output.plots=false"},
+                    "output.plots=false", "--set", "output.search_log=true"},
                    &s),
             0);
   EXPECT_EQ(s.framesProcessed, 1000u);
@@ -97,10 +106,20 @@ TEST(SystemRealData, MonoslamTestseqTrackedEndToEndWithoutKnownTarget)
   // Never lost: measurements are used in every frame after the first.
   int minMatched = 1 << 30;
   for (std::size_t i = 2; i < rows.size(); ++i) minMatched = std::min(minMatched, std::stoi(rows[i][3]));
-  std::printf("testseq single: median matched %.0f, min matched %d, final map %d\n", s.medianMatched, minMatched,
-              s.finalMapSize);
-  EXPECT_GE(minMatched, 5);
-  EXPECT_GE(s.medianMatched, 20);
+  const auto cam = camera::loadCalibFile(sharedData("monoslam_testseq") + "/calib.txt");
+  const auto st = eval::reprojectionStats(eval::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"),
+                                                                  eval::readTumTrajectory(out + "/trajectory.txt"),
+                                                                  *cam, 1e-4, 8));
+  std::printf("testseq single: median matched %.0f, min matched %d, final map %d; the estimate's poses leave %zu of %zu "
+              "features above 2 px, RMS %.3f px over %zu poses\n",
+              s.medianMatched, minMatched, s.finalMapSize, st.featuresAbove, st.nFeatures, st.rmsPx, st.nPoses);
+  // Limits at ~1.2x the measured figures of this deterministic run (2026-11-27): min matched 14,
+  // median 23; 999 poses, RMS 0.948 px, 3 of 170 features above 2 px.
+  EXPECT_GE(minMatched, 11);
+  EXPECT_GE(s.medianMatched, 19);
+  EXPECT_GE(st.nPoses, 990u);
+  EXPECT_LT(st.rmsPx, 1.14);
+  EXPECT_LE(st.featuresAbove, 4u);
 }
 
 namespace
@@ -170,16 +189,17 @@ TEST(SystemRealData, VispRbtGroundTruthDisagreesWithTheImagesAndTheEstimateAgree
   EXPECT_LT(baVsBa, 1e-4);
   EXPECT_GT(baVsGt, 0.012);
   EXPECT_GT(dirBaGt, 15.0);
-  EXPECT_LT(estVsBa, 0.01);
-  EXPECT_LT(dirEstBa, 6.0);
+  // The estimate's figures at ~1.2x the measured ones (2026-11-27: 0.67 % of path, 2.2 deg).
+  EXPECT_LT(estVsBa, 0.0081);
+  EXPECT_LT(dirEstBa, 2.7);
 }
 
 TEST(SystemRealData, ExactGroundTruthAndLongRealRunAgreeWithTheirMeasurements)
 {
   // The control of the test above: synth19's exact poses explain the SLAM's measurements to the
-  // matching noise (measured RMS 0.38 px, no feature above 2 px). And monoslam_testseq (no ground
+  // matching noise (no feature above 2 px). And monoslam_testseq (no ground
   // truth): the full system's 1000 frames against a bundle adjustment of its own measurements
-  // (measured 0.10 % of path, 0.8 % of extent; a self-consistency figure, not an accuracy one).
+  // (a self-consistency figure, not an accuracy one).
   if (!haveSharedData("monoslammot_synth19") || !haveSharedData("monoslam_testseq"))
     GTEST_SKIP() << "../shared/data/monoslammot_synth19 or monoslam_testseq is absent";
   {
@@ -195,7 +215,7 @@ TEST(SystemRealData, ExactGroundTruthAndLongRealRunAgreeWithTheirMeasurements)
     std::printf("synth19: ground truth leaves %zu of %zu features above 2 px, RMS %.2f px\n", st.featuresAbove,
                 st.nFeatures, st.rmsPx);
     EXPECT_EQ(st.featuresAbove, 0u);
-    EXPECT_LT(st.rmsPx, 0.6);
+    EXPECT_LT(st.rmsPx, 0.48);  // measured 0.40 px (2026-11-27)
   }
   const auto full = runAndRefine("imm7-shadow.ini", "monoslam_testseq", "testseq_reprojection");
   const auto& est = full.est;
@@ -205,19 +225,20 @@ TEST(SystemRealData, ExactGroundTruthAndLongRealRunAgreeWithTheirMeasurements)
               "(%zu poses)\n",
               100 * ate.rmseOverPath, 100 * ate.rmseOverExtent, ate.nPairs);
   EXPECT_GE(ate.nPairs, 990u);
-  EXPECT_LT(ate.rmseOverPath, 0.003);
+  // Measured 2026-11-27: 0.194 % of path, 1.50 % of extent (999 poses); limit ~1.2x.
+  EXPECT_LT(ate.rmseOverPath, 0.0023);
 
-  // A less circular reference: the adjustment of an independent run's matches (the single model's).
-  // Measured: the two adjustments 0.08 % of path apart, the full system 0.12 % (0.87 % of extent)
-  // from the single model's.
+  // A less circular reference: the adjustment of an independent run's matches (the single model's):
+  // how far apart the two adjustments are, and the full system from the single model's.
   const auto baSingle = runAndRefine("single.ini", "monoslam_testseq", "testseq_reprojection_single").ba;
   const auto between = eval::computeAte(ba.poses, baSingle.poses);
   const auto cross = eval::computeAte(est, baSingle.poses);
   std::printf("testseq: adjustments of two runs %.3f %% of path apart; full system vs the single model's adjustment "
               "%.3f %% of path, %.2f %% of extent\n",
               100 * between.rmseOverPath, 100 * cross.rmseOverPath, 100 * cross.rmseOverExtent);
-  EXPECT_LT(between.rmseOverPath, 0.002);
-  EXPECT_LT(cross.rmseOverPath, 0.003);
+  // Measured 2026-11-27: 0.095 % and 0.221 % of path; limits ~1.2x.
+  EXPECT_LT(between.rmseOverPath, 0.00114);
+  EXPECT_LT(cross.rmseOverPath, 0.00265);
 }
 
 TEST(SystemOutputs, RefinedTrajectoryOnlyWhenAsked)
@@ -244,6 +265,9 @@ TEST(SystemOutputs, RefinedTrajectoryOnlyWhenAsked)
   std::printf("handheld 120 frames: filter %.3f %%, refined %.3f %% of path (%.2f s)\n", 100 * s.ate->rmseOverPath,
               100 * s.ateRefined->rmseOverPath, s.refineSeconds);
   EXPECT_LT(s.ateRefined->rmseOverPath, s.ate->rmseOverPath);
+  // Measured 2026-11-27: filter 1.957 %, refined 0.370 % of path; limits ~1.2x.
+  EXPECT_LT(s.ate->rmseOverPath, 0.0235);
+  EXPECT_LT(s.ateRefined->rmseOverPath, 0.0044);
   // The filter's own outputs do not change.
   EXPECT_EQ(readFile(plain + "/trajectory.txt"), readFile(refined + "/trajectory.txt"));
 }
@@ -328,7 +352,7 @@ TEST(SystemRealData, MonoslamTestseqBlackoutIsRelocalisedOnTheSameMap)
   // Real images, a covered lens for 2 s (frames 400-459 black): the full system keeps its map, finds it
   // again in the first normal frame ([slam] relocalise) and goes on in the same frame and scale. The
   // trajectory after the blackout is compared with the undamaged run's (same start, SE(3) alignment,
-  // no rescaling): measured 1.2 % of its extent (69 % when the map was rebuilt).
+  // no rescaling): measured 1.48 % of its extent (2026-11-27) (69 % when the map was rebuilt).
   if (!haveSharedData("monoslam_testseq")) GTEST_SKIP() << "../shared/data/monoslam_testseq is absent";
   const std::string data = sharedData("monoslam_testseq");
   const std::string folder = outDir("testseq_blackout_input");
@@ -383,5 +407,5 @@ TEST(SystemRealData, MonoslamTestseqBlackoutIsRelocalisedOnTheSameMap)
   std::printf("testseq blackout 400-459, imm7-shadow: after the blackout vs the undamaged run (SE3) %.4f = %.2f %% of "
               "extent\n",
               a.rmse, 100 * a.rmseOverExtent);
-  EXPECT_LT(a.rmseOverExtent, 0.05);
+  EXPECT_LT(a.rmseOverExtent, 0.0178);  // measured 1.48 % of extent (2026-11-27); limit ~1.2x
 }

@@ -1,12 +1,15 @@
 /* Tests: the static/dynamic classifier (Sec. III-A) on measurement-level simulations of a hand-held
  * camera (0.2-0.5 units/s, 30 Hz, f = 200 px, 1 px noise, camera motion given as noisy increments
  * with their covariance): static points must rarely be called dynamic (<= alpha = 5 %), moving
- * points almost never static (<= 1 %). */
+ * points almost never static (<= 1 %); and the single three-ray test alone is calibrated (chi-square
+ * statistic, rejection rate alpha) on independent trials with correlated relative poses. */
 #include <gtest/gtest.h>
 #include <immslam/eval/classification.h>
+#include <immslam/shadow/CRayClassifier.h>
 #include <immslam/shadow/CShadowFilter.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 
 #include "shadow_test_utils.h"
@@ -276,17 +279,88 @@ TEST(ShadowClassifier, HandheldStaticVsMoving)
               100 * rate(moving, 2), moving[0] + moving[1] + moving[2]);
   ASSERT_GE(stat[0] + stat[1] + stat[2], 1000);
   ASSERT_GE(moving[0] + moving[1] + moving[2], 1000);
-  EXPECT_LE(rate(stat, 2), 0.05);      // static called dynamic (target: alpha)
-  // Single tests of static points are calibrated: the relative-motion covariance is right.
+  // Limits at ~1.2x the measured figures of this deterministic run (seed 41, 60 sequences; measured
+  // 2026-11-27), so that a 20 % loss fails.
+  EXPECT_LE(rate(stat, 2), 0.017);     // static called dynamic: measured 1.4 % (target: <= alpha)
+  // Single tests of static points are calibrated: the relative-motion covariance is right. Measured
+  // 4.19 % of 117 725 tests; 2.64 % with the relative-pose cross-covariance dropped from the ray test
+  // (tests/mutation/ray-test-cross-covariance-dropped.patch). Both sides: an over-cautious test
+  // (inflated covariance) fails as well as an over-confident one.
   const double single = double(st.staticRejections) / st.staticEvaluations;
-  EXPECT_GT(single, 0.025);
-  EXPECT_LT(single, 0.065);
-  EXPECT_LE(rate(visible, 1), 0.01);   // moving in random / across-ray directions called static
-  EXPECT_LE(double(st.guaranteedStatic) / st.guaranteedMoving, 0.01);  // the power guarantee
-  EXPECT_LE(rate(byKind[EMotionKind::AlongRay], 1), 0.15);  // along the ray: below the guarantee, see README
-  EXPECT_GE(rate(visible, 2), 0.95);
-  EXPECT_GE(rate(stat, 1), 0.4);       // static points promoted within max_pending_frames
-  // Promoted inverse distances are consistent.
-  EXPECT_NEAR(st.rhoNeesSum / st.nRho, 1.0, 0.3);
+  EXPECT_GT(single, 0.035);
+  EXPECT_LT(single, 0.050);
+  EXPECT_LE(rate(visible, 1), 0.005);  // moving in random / across-ray directions called static: 3 of 840
+  EXPECT_LE(double(st.guaranteedStatic) / st.guaranteedMoving, 0.01);  // the power guarantee: 0 of 547
+  EXPECT_LE(rate(byKind[EMotionKind::AlongRay], 1), 0.127);  // along the ray: 10.6 %, below the guarantee, see README
+  EXPECT_GE(rate(visible, 2), 0.97);   // measured 97.5 %
+  EXPECT_GE(rate(stat, 1), 0.45);      // static points promoted within max_pending_frames: 53.9 %
+  // Promoted inverse distances are consistent: the mean normalized squared error of n chi-square(1)
+  // values within 3 sigmas (sqrt(2 / n)) of 1, from both sides (measured 0.93, n = 647).
+  EXPECT_NEAR(st.rhoNeesSum / st.nRho, 1.0, 3 * std::sqrt(2.0 / st.nRho));
   EXPECT_GE(double(st.rhoInside3) / st.nRho, 0.97);
+}
+
+TEST(ShadowClassifier, SingleRayTestIsCalibratedWithCorrelatedPoses)
+{
+  // The three-ray test of CRayClassifier alone, on independent Monte Carlo trials of a static point
+  // seen at frames 0, 10 and 20 by a camera whose relative poses T_0m, T_0k are composed from noisy
+  // increments (the chain to k contains the chain to m: their errors are correlated). The pose noise
+  // (1.5e-3 units, 1e-3 rad per frame) is about as large in the image as the 1 px pixel noise, so the
+  // joint covariance, cross-covariance Cov(delta_k, delta_m) included, decides the statistic: with the
+  // right one T is chi-square(3), mean 3, and rejects at alpha = 5 %. Measured (seed 97, 10 000
+  // trials): rejection rate 4.67 %, mean T 3.002; with the cross-covariance block dropped
+  // (tests/mutation/ray-test-cross-covariance-dropped.patch) 2.86 % and 2.58: both fail.
+  // Bands: the rate within 3 binomial sigmas of alpha (+-0.65 %), the mean within 3 sigmas of the
+  // mean of 10 000 chi-square(3) values (sqrt(6 / 10 000) = 0.024: +-0.075).
+  const auto cam = simCamera();
+  TRayClassifierParams params;
+  const CRayClassifier cls(params, cam);
+  Rng rng(97);
+  const double sigmaT = 0.0015, sigmaTheta = 0.001;
+  Mat6 Cinc = Mat6::Zero();
+  Cinc.topLeftCorner<3, 3>() = sigmaT * sigmaT * Mat3::Identity();
+  Cinc.bottomRightCorner<3, 3>() = sigmaTheta * sigmaTheta * Mat3::Identity();
+  const int trials = 10000, frames = 20;
+  int evaluated = 0, rejected = 0;
+  double sumT = 0;
+  for (int trial = 0; trial < trials; ++trial)
+  {
+    // A static point at depth 2-4 in C0, away from the image border.
+    const Vec2 uv0(uniform(rng, 60, cam->width() - 60), uniform(rng, 50, cam->height() - 50));
+    const Vec3 ray = cam->unproject(uv0).unitVector();
+    const Vec3 X = ray * uniform(rng, 2, 4) / ray.z();
+    // A sideways drift with some wobble (0.01 units and ~0.2 deg per frame).
+    const Vec3 drift(uniform(rng, -1, 1) > 0 ? 0.01 : -0.01, uniform(rng, -0.004, 0.004), uniform(rng, -0.004, 0.004));
+    TUncertainPose truth;  // T_0j, true
+    TRayTrack track;
+    const auto measure = [&](const TUncertainPose& T) {
+      Vec2 uv;
+      EXPECT_TRUE(cam->project(T.rotation().transpose() * (X - T.t), uv));
+      return Vec2(uv + params.sigmaPx * Vec2(gauss(rng), gauss(rng)));
+    };
+    track.start(0, measure(truth));
+    for (int k = 1; k <= frames; ++k)
+    {
+      TUncertainPose inc;
+      inc.t = drift + 0.002 * gauss3(rng);
+      inc.q = math::quatFromRotationVector(0.003 * gauss3(rng));
+      truth = composePoses(truth, inc);
+      const TUncertainPose noisy = perturbPose(inc, sampleGaussian<6>(rng, Cinc));
+      track.advance(k, 1, noisy.t, noisy.q, Cinc);
+      if (k == frames / 2 || k == frames) track.addView(measure(truth));
+    }
+    const TRayTestResult r = cls.test(track);
+    if (!r.evaluated) continue;
+    ++evaluated;
+    rejected += r.test.test.rejected();
+    sumT += r.test.test.T;
+  }
+  const double rate = double(rejected) / evaluated, meanT = sumT / evaluated;
+  std::printf("[ shadow   ] three-ray test, correlated relative poses: %d of %d trials evaluated, rejected %.2f %%, "
+              "mean T %.3f (chi-square(3): 3)\n",
+              evaluated, trials, 100 * rate, meanT);
+  ASSERT_GE(evaluated, trials - 10);
+  const double sigmaRate = std::sqrt(params.alpha * (1 - params.alpha) / evaluated);
+  EXPECT_NEAR(rate, params.alpha, 3 * sigmaRate);
+  EXPECT_NEAR(meanT, 3.0, 3 * std::sqrt(6.0 / evaluated));
 }

@@ -18,7 +18,6 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
-#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -1341,22 +1340,4 @@ TEST(SimComposite, VideoObjectIsPastedWhereItsMasksAreUntilItsVideoEnds)
   EXPECT_NE(e3.str().find("--object-video"), std::string::npos) << e3.str();
   fs::remove_all(dst.path.string() + "2");
   fs::remove_all(dst.path.string() + "3");
-}
-
-// ---------------------------------------------------------------------------------------------
-// Speed (reported, never asserted)
-// ---------------------------------------------------------------------------------------------
-
-TEST(SimSpeed, ReportFramesPerSecond)
-{
-  for (const std::string cam : {"pinhole 320 240 240 240 159.5 119.5", "pinhole 640 480 480 480 319.5 239.5"})
-  {
-    const auto sim = make("handheld-moving", {"scenario.camera=" + cam});
-    const auto t0 = std::chrono::steady_clock::now();
-    const std::size_t n = 30;
-    for (std::size_t k = 0; k < n; ++k) sim->render(k);
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::cout << "[ speed    ] " << cam << ": " << n / s << " frames/s (2 threads, noise on)\n";
-    RecordProperty(cam.substr(8, 7), std::to_string(n / s));
-  }
 }
