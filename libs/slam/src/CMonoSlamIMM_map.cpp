@@ -486,7 +486,8 @@ void CMonoSlamIMM::removeFeatures(const std::vector<std::int64_t>& ids)
 }
 
 std::vector<frontend::TCorner> CMonoSlamIMM::findNewFeatureCandidates(const cv::Mat& grey, int maxNew,
-                                                                      const std::vector<Vec2>& alsoOccupied) const
+                                                                      const std::vector<Vec2>& alsoOccupied,
+                                                                      int gridScale) const
 {
   std::vector<Vec2> occupied = alsoOccupied;
   // (A map given up is not where its features are predicted: their cells are free.)
@@ -503,8 +504,8 @@ std::vector<frontend::TCorner> CMonoSlamIMM::findNewFeatureCandidates(const cv::
   }
   frontend::TDetectorParams p;
   p.fastThreshold = m_opts.fast_threshold;
-  p.gridCols = m_opts.grid_cols;
-  p.gridRows = m_opts.grid_rows;
+  p.gridCols = m_opts.grid_cols * gridScale;
+  p.gridRows = m_opts.grid_rows * gridScale;
   p.minDistancePx = m_opts.min_corner_distance_px;
   p.borderPx = detectionBorderPx();
   p.minShiTomasi = m_opts.min_shi_tomasi;
