@@ -108,7 +108,7 @@ TEST(SystemRealData, MonoslamTestseqTrackedEndToEndWithoutKnownTarget)
   for (std::size_t i = 2; i < rows.size(); ++i) minMatched = std::min(minMatched, std::stoi(rows[i][3]));
   const auto cam = camera::loadCalibFile(sharedData("monoslam_testseq") + "/calib.txt");
   const auto st = eval::reprojectionStats(eval::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"),
-                                                                  eval::readTumTrajectory(out + "/trajectory.txt"),
+                                                                  core::readTumTrajectory(out + "/trajectory.txt"),
                                                                   *cam, 1e-4, 8));
   std::printf("testseq single: median matched %.0f, min matched %d, final map %d; the estimate's poses leave %zu of %zu "
               "features above 2 px, RMS %.3f px over %zu poses\n",

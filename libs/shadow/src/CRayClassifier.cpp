@@ -31,6 +31,7 @@ void TRayTrack::start(std::int64_t frame_, const Vec2& uv)
   elapsed = 0;
   frame = frame_;
   recent.clear();
+  notTranslating = 1;
   acceptStreak = 0;
   evaluations = 0;
   rejections = 0;
@@ -38,8 +39,9 @@ void TRayTrack::start(std::int64_t frame_, const Vec2& uv)
 }
 
 void TRayTrack::advance(std::int64_t frame_, double dt, const Vec3& t, const Vec4& dq, const Mat6& cov,
-                        double covScale)
+                        double covScale, double pNotTranslating)
 {
+  notTranslating = std::min(notTranslating, std::clamp(pNotTranslating, 0.0, 1.0));
   TUncertainPose inc;
   inc.t = t;
   inc.q = dq;
@@ -333,29 +335,41 @@ EShadowClass CRayClassifier::classify(TRayTrack& track, TDecision* info, TRayTes
       track.elapsed < m_p.minTestFrames)
     return EShadowClass::Pending;
   TRayTestResult r = test(track);
+  const TRayView& v0 = track.views.front();
+  const TRayView& vm = track.views[static_cast<std::size_t>(r.viewIndex[1])];
+  const TRayView& vk = track.views.back();
+  r.depthFree = depthFreeTest(*m_cam, v0.uv, {vm.uv, vm.T_0j, vm.time - v0.time}, {vk.uv, vk.T_0j, vk.time - v0.time},
+                              perturbationTransport(vm.T_0j, vk.T_0j) * vm.T_0j.cov, m_p.sigmaPx, m_p.alpha,
+                              m_p.maxInverseDistance);
+  const TDepthFreeTest& d = r.depthFree;
   EShadowClass out = EShadowClass::Pending;
-  if (r.evaluated)
+  if (r.evaluated || d.evaluated)
   {
-    const bool rejected = r.test.test.rejected();
+    const bool rejected = (r.evaluated && r.test.test.rejected()) || (d.evaluated && d.rejected);
     ++track.evaluations;
     track.rejections += rejected ? 1 : 0;
     track.recent.push_back(rejected ? 1 : 0);
     if (static_cast<int>(track.recent.size()) > m_p.dynamicWindow) track.recent.erase(track.recent.begin());
     track.acceptStreak = rejected ? 0 : track.acceptStreak + 1;
     const int nRej = static_cast<int>(std::count(track.recent.begin(), track.recent.end(), 1));
-    if (info) info->testT = r.test.test.T;
+    if (info) info->testT = r.evaluated ? r.test.test.T : d.T;
     if (nRej >= m_p.dynamicRejections)
       out = EShadowClass::Dynamic;
     else if (!rejected && track.acceptStreak >= m_p.staticAcceptances && track.elapsed >= m_p.staticMinFrames)
     {
-      const double pd = detectionProbability(track, r, m_p.staticMinVelocityPx);
+      const double pRays = r.evaluated ? detectionProbability(track, r, m_p.staticMinVelocityPx) : 0.0;
+      const double pDepthFree = track.notTranslating * depthFreeDetectionProbability(
+                                                           d, m_p.staticMinVelocityPx, m_p.alpha, m_p.maxInverseDistance);
+      const double pd = std::max(pRays, pDepthFree);
       track.detectionProbability = pd;
       if (pd >= m_p.staticPower)
       {
         out = EShadowClass::Static;
+        r.staticByDepthFree = pRays < m_p.staticPower;
         if (info)
         {
-          info->minDetectableVelocityPx = minimumDetectableVelocityPx(track, r);
+          info->minDetectableVelocityPx = r.evaluated ? minimumDetectableVelocityPx(track, r)
+                                                      : std::numeric_limits<double>::infinity();
           info->detectionProbability = pd;
         }
       }

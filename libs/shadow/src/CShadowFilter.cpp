@@ -124,7 +124,8 @@ void CShadowFilter::predictAll(const TCameraMotion& motion)
   for (auto& f : m_features)
   {
     predictShadowState(f.ekf, motion.dt, motion.t, m_motion.dq, covInc, m_sigmaA);
-    f.track.advance(motion.frame, motion.dt, motion.t, m_motion.dq, covInc, m_opts.increment_cov_scale);
+    f.track.advance(motion.frame, motion.dt, motion.t, m_motion.dq, covInc, m_opts.increment_cov_scale,
+                    motion.pNotTranslating);
     f.searched = f.measured = false;
     if (!shadowInnovation(f.ekf, *m_cam, m_opts.sigma_pixel, f.predicted, f.S))
     {
@@ -186,7 +187,7 @@ TPromotion CShadowFilter::makePromotion(const TShadowFeature& f, const TRayTestR
   p.uv = f.uv;
   // Static triangulation (the classifier's intersection, in C0) seen from the current camera.
   const Vec4 X = r.test.intersection.X;
-  if (r.evaluated && X.allFinite() && std::abs(X[3]) > 1e-9 * X.norm())
+  if (r.evaluated && !r.staticByDepthFree && X.allFinite() && std::abs(X[3]) > 1e-9 * X.norm())
   {
     Mat3 cov_x;
     const Vec3 x = r.test.intersection.euclidean(&cov_x);

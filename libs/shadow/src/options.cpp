@@ -111,6 +111,7 @@ TRayClassifierParams CShadowFilter::TOptions::classifierParams() const
   p.staticMinVelocityPx = static_min_velocity_px;
   p.staticPower = static_power;
   p.staticWorstCase = static_power_worst_case;
+  p.maxInverseDistance = init_rho + 3 * init_rho_std;
   return p;
 }
 }  // namespace immslam::shadow

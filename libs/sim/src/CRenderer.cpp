@@ -72,6 +72,7 @@ struct CRenderer::TInstance
   Vec3 sphere_C;  ///< box centre in the camera frame
   double radius = 0;
   int objectId = 0;
+  bool moving = false;
   int firstSurface = 0;
   bool inside = false;
 };
@@ -160,6 +161,7 @@ std::vector<CRenderer::TInstance> CRenderer::prepare(const std::vector<TBox>& bo
     I.sphere_C = R_WC.transpose() * (b.T_W_B.t - T_W_C.t);
     I.radius = b.half.norm() * (1.0 + 1e-9) + 1e-9;
     I.objectId = b.objectId;
+    I.moving = b.moving;
     I.firstSurface = b.firstSurface;
     I.inside = b.inside;
   }
@@ -242,6 +244,7 @@ std::optional<TRayHit> CRenderer::raycast(const std::vector<TBox>& boxes, const 
   TRayHit r;
   const auto& I = inst[static_cast<std::size_t>(h.inst)];
   r.objectId = I.objectId;
+  r.moving = I.moving;
   r.surfaceId = I.firstSurface + 2 * h.axis + (h.positive ? 1 : 0);
   r.range = h.t;
   r.depth = h.t * b.z();
@@ -301,7 +304,7 @@ TRenderedImages CRenderer::render(const CWorld& world, const std::vector<TBox>& 
           continue;
         }
         const auto& I = inst[static_cast<std::size_t>(h.inst)];
-        mrow[u] = static_cast<std::uint8_t>(I.objectId);
+        mrow[u] = static_cast<std::uint8_t>(I.moving ? I.objectId : 0);  // masks: what moves now
         if (drow) drow[u] = static_cast<float>(h.t * b.z());
         if (!vrow) continue;
         const int a = h.axis, j = (a + 1) % 3, k = (a + 2) % 3;

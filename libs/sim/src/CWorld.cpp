@@ -139,8 +139,9 @@ CWorld::CWorld(const TScenario& sc)
     }
 }
 
-TPose CWorld::objectPose(const TMovingObjectSpec& o, double t)
+TPose CWorld::objectPose(const TMovingObjectSpec& o, double tNow)
 {
+  const double t = std::max(tNow, o.start_s);  // standing still before start_s
   TPose p;
   const double ph = 2.0 * M_PI * t / o.period_s + o.phase_deg * kDeg;
   const Vec3 d = o.direction.normalized();
@@ -170,6 +171,7 @@ std::vector<TBox> CWorld::boxesAt(double t) const
     b.T_W_B = objectPose(m_objects[i], t);
     b.half = 0.5 * m_objects[i].size;
     b.objectId = m_objects[i].id;
+    b.moving = t >= m_objects[i].start_s;
     b.firstSurface = m_objectFirstSurface[i];
     out.push_back(b);
   }

@@ -54,7 +54,7 @@ const std::map<std::string, std::set<std::string>>& allowedKeys()
       {"objects", {"enabled"}},
       {"object",
        {"size", "path", "center", "direction", "amplitude", "period_s", "phase_deg", "yaw_deg",
-        "spin_deg_s"}}};
+        "spin_deg_s", "start_s"}}};
   return k;
 }
 
@@ -346,6 +346,7 @@ TScenario TScenario::fromConfig(const mrpt::config::CConfigFileBase& cfg, const 
     o.amplitude = r.number("amplitude", o.amplitude);
     o.period_s = r.number("period_s", o.period_s);
     o.phase_deg = r.number("phase_deg", o.phase_deg);
+    o.start_s = r.number("start_s", o.start_s);
     o.yaw_deg = r.number("yaw_deg", o.yaw_deg);
     o.spin_deg_s = r.vec<3>("spin_deg_s", o.spin_deg_s);
     sc.objects.push_back(o);
@@ -398,6 +399,7 @@ void TScenario::validate() const
     if (!(o.size.minCoeff() > 0)) bad(sec + "size", "must be positive");
     if (!(o.amplitude >= 0)) bad(sec + "amplitude", "must be >= 0");
     if (!(o.period_s > 0)) bad(sec + "period_s", "must be positive");
+    if (!(o.start_s >= 0 && o.start_s < 1e5)) bad(sec + "start_s", "must be in [0, 1e5) s");
     if (!(o.direction.norm() > 1e-9)) bad(sec + "direction", "must be a non-zero vector");
   }
 }
@@ -481,6 +483,7 @@ std::string TScenario::toIni() const
     kv("amplitude", fmt(ob.amplitude), "half travel (linear) or radius (circular)");
     kv("period_s", fmt(ob.period_s), "period (s)");
     kv("phase_deg", fmt(ob.phase_deg), "phase at t = 0 (deg)");
+    kv("start_s", fmt(ob.start_s), "stands still until this time (s)");
     kv("yaw_deg", fmt(ob.yaw_deg), "initial rotation about the world y axis (deg)");
     kv("spin_deg_s", v3(ob.spin_deg_s), "angular velocity in W (deg/s)");
   }

@@ -51,7 +51,7 @@ std::vector<core::TGroundTruthPoint> truthAtPixels(const CSimulator& sim, const 
     core::TGroundTruthPoint p;
     p.timestamp = times[k];
     p.pointId = static_cast<std::int64_t>(s);
-    p.moving = hit->objectId > 0;
+    p.moving = hit->objectId > 0 && hit->moving;
     p.p_W = hit->p_W;
     p.uv = smp.uv;
     (p.moving ? st.onMoving : st.onStatic)++;

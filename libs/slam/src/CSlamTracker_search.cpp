@@ -185,7 +185,8 @@ std::vector<TCandidate> CSlamTracker::takeMeasurements(const std::vector<std::pa
 }
 
 std::vector<frontend::TCorner> CSlamTracker::findNewFeatureCandidates(const cv::Mat& grey, int maxNew,
-                                                                      const std::vector<Vec2>& alsoOccupied) const
+                                                                      const std::vector<Vec2>& alsoOccupied,
+                                                                      int gridScale) const
 {
   std::vector<Vec2> occupied = alsoOccupied;
   // (A map given up is not where its features are predicted: their cells are free.)
@@ -204,8 +205,8 @@ std::vector<frontend::TCorner> CSlamTracker::findNewFeatureCandidates(const cv::
   }
   frontend::TDetectorParams p;
   p.fastThreshold = m_opts.fast_threshold;
-  p.gridCols = m_opts.grid_cols;
-  p.gridRows = m_opts.grid_rows;
+  p.gridCols = m_opts.grid_cols * gridScale;
+  p.gridRows = m_opts.grid_rows * gridScale;
   p.minDistancePx = m_opts.min_corner_distance_px;
   p.borderPx = detectionBorderPx();
   p.minShiTomasi = m_opts.min_shi_tomasi;

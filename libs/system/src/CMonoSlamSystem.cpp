@@ -50,7 +50,9 @@ void CMonoSlamSystem::TOptions::loadFromConfigFile(const mrpt::config::CConfigFi
   IMMSLAM_LOAD_INT(starved_below);
   IMMSLAM_LOAD_INT(release_min_measured);
   IMMSLAM_LOAD_STRING(pending_weight);
+  IMMSLAM_LOAD_INT(watch_features);
   parsePendingWeight(pending_weight, s);
+  core::requireInRange(watch_features, 0, 1000, s, "watch_features");
   core::requireNonNegative(handover_rejections, s, "handover_rejections");
   core::requireNonNegative(starved_below, s, "starved_below");
   core::requirePositive(release_min_measured, s, "release_min_measured");
@@ -65,6 +67,7 @@ void CMonoSlamSystem::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& 
                                "SLAM short of features (fewer in view): release unresolved shadow features (0: never)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(release_min_measured, "frames a shadow feature must be tracked to be released");
   MRPT_SAVE_CONFIG_VAR_COMMENT(pending_weight, "weight of a pending shadow feature in the count of features in view, in [0, 1], or auto (the recent fraction of pending features that ended in SLAM)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(watch_features, "pending shadow features kept in view even when SLAM needs none, to see what moves (0: only when SLAM needs features)");
 }
 
 CMonoSlamSystem::CMonoSlamSystem(const mrpt::config::CConfigFileBase& cfg, camera::CCameraModel::Ptr cam)
@@ -100,6 +103,9 @@ shadow::TCameraMotion CMonoSlamSystem::cameraMotion(double timestamp, double dt)
   m.cov_W_C = J * m_slam->cameraPoseCovariance() * J.transpose();
   // Increment covariance from the velocities' (t = v dt, dtheta = w dt, first order).
   m.cov_increment = m_slam->velocityCovariance() * dt * dt;
+  const VecX mu = m_slam->modelProbabilities();
+  for (int i = 0; i < mu.size(); ++i)
+    if (m_slam->models()[i].family != motion::EMotionFamily::General) m.pNotTranslating += mu[i];
   return m;
 }
 
@@ -109,6 +115,7 @@ int CMonoSlamSystem::promoteFromShadow(const shadow::TShadowReport& srep, const 
   // Promotions into SLAM keep their ids and the shadow's inverse-depth estimate as the prior.
   std::vector<shadow::TPromotion> promotions = srep.promotions;
   if (holding) promotions.clear();
+  retireUnneededWatched(promotions, slamInView);
   // Without parallax nothing can be classified. While the IMM says the camera is not translating
   // (stationary and rotation families dominate), the SLAM takes the unresolved features it needs,
   // as the IMM paper's filter does with inverse depth; with translation, only when starving.
@@ -135,7 +142,10 @@ int CMonoSlamSystem::promoteFromShadow(const shadow::TShadowReport& srep, const 
   }
   m_frame.promoted = countAdded(m_slam->addFeaturesAt(grey, uv, prior, ids));
   int pendingVisible = 0;
-  for (const auto& v : srep.views) pendingVisible += (v.cls == shadow::EShadowClass::Pending && v.searched) ? 1 : 0;
+  // Watched features do not count as SLAM's: they are not there for SLAM (watch_features).
+  m_watchedVisible = 0;
+  for (const auto& v : srep.views)
+    if (v.cls == shadow::EShadowClass::Pending && v.searched) ++(m_watched.count(v.id) ? m_watchedVisible : pendingVisible);
   // Outcomes of the pending features that left the shadow filter this frame (pendingWeight()).
   const int became = srep.nPromoted + m_frame.released;
   m_becameSlam = kOutcomeDecay * m_becameSlam + became;
@@ -220,6 +230,8 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
         if (firstMap) m_frame.newFirstMap = countAdded(added);
       }
     }
+    if (m_shadow && !holding && !firstMap)
+      addWatchedFeatures(grey, pendingVisible + m_watchedVisible + m_frame.newShadow, m_shadow->occupiedPixels());
   }
   m_prevR = m_slam->cameraPosition();
   m_prevQ = m_slam->cameraOrientation();
@@ -317,6 +329,61 @@ const TSystemFrame& CMonoSlamSystem::processMeasurements(double timestamp,
   m_prevQ = m_slam->cameraOrientation();
   m_frame.totalMs = msSince(t0);
   return m_frame;
+}
+
+void CMonoSlamSystem::retireUnneededWatched(std::vector<shadow::TPromotion>& promotions, int slamInView)
+{
+  if (m_watched.empty()) return;
+  // Promotions SLAM asked for go in first (as without watching); watched ones fill what SLAM still needs.
+  int need = m_slam->options().min_visible_features - slamInView;
+  std::vector<shadow::TPromotion> kept, watched;
+  for (auto& p : promotions) (m_watched.erase(p.id) ? watched : kept).push_back(p);
+  need -= static_cast<int>(kept.size());
+  const Vec4 q = m_slam->cameraOrientation();
+  const std::int64_t until = m_slam->lastReport().frame + m_shadowOpts.max_pending_frames;
+  for (auto& p : watched)
+  {
+    if (need-- > 0)
+    {
+      kept.push_back(p);
+      continue;
+    }
+    m_retired.emplace_back(math::quatRotate(q, m_slam->camera().unproject(p.uv).unitVector()), until);
+    ++m_frame.retired;
+  }
+  promotions = std::move(kept);
+}
+
+void CMonoSlamSystem::addWatchedFeatures(const cv::Mat& grey, int pendingSearched, std::vector<Vec2> avoid)
+{
+  if (m_opts.watch_features <= 0) return;
+  // Forget watched ids that left the shadow filter (decided dynamic, lost, timed out).
+  std::unordered_set<std::int64_t> held;
+  for (const auto& f : m_shadow->features())
+    if (m_watched.count(f.id)) held.insert(f.id);
+  m_watched.swap(held);
+  const int want = std::clamp(m_opts.watch_features - pendingSearched, 0, m_slam->options().max_new_features_per_frame);
+  if (want == 0) return;
+  // Retired bearings, seen through the current orientation (a still or rotating camera sees them
+  // there; a translating one only roughly, for a while), stay clear of new watched features.
+  const std::int64_t frame = m_slam->lastReport().frame;
+  m_retired.erase(std::remove_if(m_retired.begin(), m_retired.end(), [&](const auto& r) { return r.second < frame; }),
+                  m_retired.end());
+  const Vec4 qInv = math::quatConjugate(m_slam->cameraOrientation());
+  for (const auto& r : m_retired)
+  {
+    Vec2 uv;
+    if (m_slam->camera().project(math::quatRotate(qInv, r.first), uv)) avoid.push_back(uv);
+  }
+  std::vector<Vec2> uv;
+  for (const auto& c : m_slam->findNewFeatureCandidates(grey, want, avoid, 2)) uv.push_back(c.uv);
+  for (std::int64_t id : m_shadow->addFeatures(grey, uv))
+    if (id >= 0)
+    {
+      m_watched.insert(id);
+      ++m_frame.newWatch;
+      ++m_frame.newShadow;
+    }
 }
 
 double CMonoSlamSystem::pendingWeight() const

@@ -4,6 +4,7 @@
 
 #include <immslam/camera/CCameraModel.h>
 #include <immslam/geometry/ray_incidence.h>
+#include <immslam/shadow/depth_free_test.h>
 #include <immslam/shadow/relative_pose.h>
 #include <immslam/shadow/shadow_types.h>
 
@@ -35,12 +36,16 @@ struct TRayTrack
   int evaluations = 0;          ///< valid tests so far
   int rejections = 0;           ///< rejected tests so far
   double detectionProbability = 0;  ///< last power figure computed (detectionProbability())
+  /** The smallest probability, over the frames since the first view, that the camera did not
+   * translate (TCameraMotion::pNotTranslating). */
+  double notTranslating = 1;
 
   /** Starts the track at its first observation. */
   void start(std::int64_t frame, const Vec2& uv);
   /** One frame later: \f$ T_{0k} \leftarrow T_{0k}\,T_{k-1,k} \f$ (composePoses) with the increment
-   * (t, dq) and its covariance times covScale. */
-  void advance(std::int64_t frame, double dt, const Vec3& t, const Vec4& dq, const Mat6& cov, double covScale = 1);
+   * (t, dq) and its covariance times covScale; pNotTranslating as TCameraMotion's. */
+  void advance(std::int64_t frame, double dt, const Vec3& t, const Vec4& dq, const Mat6& cov, double covScale = 1,
+               double pNotTranslating = 0);
   /** Records the current frame's measurement as a view (at the current T_0k). */
   void addView(const Vec2& uv);
 };
@@ -54,6 +59,10 @@ struct TRayTestResult
   MatX cov_rays;                    ///< 18x18 joint covariance of the three rays (Plücker, in C0)
   geometry::TUncertainLine3 rays[3];
   double parallaxRad = 0;           ///< widest angle between the three rays
+  TDepthFreeTest depthFree;         ///< the depth-free test of the same three views
+  /** A static decision whose power came from the depth-free test alone: the rays lack the parallax
+   * to triangulate, so the promotion is a ray of unknown depth. */
+  bool staticByDepthFree = false;
 };
 
 /** Parameters of the classifier (loaded by CShadowFilter::TOptions, section [shadow]). */
@@ -69,6 +78,9 @@ struct TRayClassifierParams
   double staticMinVelocityPx = 1.0; ///< ... and power against this speed (px/frame at the point's distance)
   double staticPower = 0.95;      ///< detection probability that defines "power"
   bool staticWorstCase = true;    ///< power in every direction (true) or on average over directions
+  /** Largest inverse distance a static point may have in the depth-free test (the shadow EKF's
+   * prior: init_rho + 3 init_rho_std). */
+  double maxInverseDistance = 4.0;
 };
 
 /** The classifier.
@@ -110,6 +122,16 @@ struct TRayClassifierParams
  *   along-ray movers through. Motions exactly explained by a static point at another depth are
  *   undetectable by any test on these rays.
  * - Velocities of the shadow EKF are never used (poorly observable after initialisation, Sec. III-A).
+ *
+ * The depth-free test (depth_free_test.h) runs beside the three-ray test on the same three views.
+ * A frame's evaluation rejects when either test rejects (both are valid whatever the camera does).
+ * A static decision needs power, a mixture of the two tests' through the bank:
+ * \f$ \max(P_{rays},\; \pi_{nt} P_{df}) \ge \f$ staticPower, with \f$ P_{df} \f$ the depth-free test's
+ * worst-direction probability of detecting an image motion of staticMinVelocityPx per frame and
+ * \f$ \pi_{nt} \f$ the smallest probability, over the track's frames, that the camera did not
+ * translate (the IMM's stationary and rotation families). The weight matters: image motion is the
+ * only evidence a camera that does not translate has, and a point that slides along its own viewing
+ * ray shows none; a translating camera can wait for the parallax that reveals it.
  */
 class CRayClassifier
 {

@@ -39,6 +39,10 @@ struct TCameraMotion
   Vec3 t = Vec3::Zero();                       ///< increment: current centre in C_{k-1}
   Vec4 dq = Vec4(1, 0, 0, 0);                  ///< increment: R(dq) = R_{C_{k-1} C_k}
   Mat6 cov_increment = Mat6::Zero();           ///< covariance of [dt; dtheta] of the increment
+  /** Probability that the camera did not translate in this frame: the IMM bank's stationary and
+   * rotation families (0 when unknown, e.g. a single general model). It weighs the power of the
+   * depth-free test in a static decision (CRayClassifier). */
+  double pNotTranslating = 0;
 
   /** The motion of a camera that moved from pose (r0, q0) to (r1, q1) (both T_W_C): t and dq of
    * the increment (covariances left zero). */

@@ -35,7 +35,7 @@ struct TRenderedImages
 {
   cv::Mat grey;    ///< CV_8UC1 (empty with mask_only)
   cv::Mat colour;  ///< CV_8UC3 BGR when requested
-  cv::Mat mask;    ///< CV_8UC1: 0 static world, k moving object k
+  cv::Mat mask;    ///< CV_8UC1: 0 static world (and objects standing still), k moving object k
   cv::Mat depth;   ///< CV_32FC1 when requested
 };
 

@@ -32,6 +32,8 @@ struct TBox
   Vec3 half = Vec3::Constant(0.5);
   /** 0: static world, k: moving object k. */
   int objectId = 0;
+  /** A moving object that moves at this time (false while it stands still before its start_s). */
+  bool moving = false;
   /** Index of face 0 in CWorld::surfaces(); faces follow. */
   int firstSurface = 0;
   /** True for the room: seen from inside. */

@@ -53,6 +53,9 @@ struct TMovingObjectSpec
   double yaw_deg = 0.0;
   /** Constant angular velocity in W (deg/s). */
   Vec3 spin_deg_s = Vec3::Zero();
+  /** The object stands still, where its path puts it at this time, until this time (s from the
+   * first frame); then it moves. Masks and pixel truth mark it as moving only from then on. */
+  double start_s = 0.0;
 };
 
 /** Everything that defines a rendered sequence. All keys have defaults except `[scenario] camera`

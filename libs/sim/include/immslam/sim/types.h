@@ -44,6 +44,9 @@ struct TRayHit
 {
   /** 0 for the static world (room and static boxes), k for moving object k. */
   int objectId = 0;
+  /** The object hit moves at this time (false for the static world and for an object that still
+   * stands before its start_s). */
+  bool moving = false;
   /** Textured face hit (index into CWorld::surfaces()). */
   int surfaceId = 0;
   /** The 3-D point hit, in the world frame. */

@@ -127,9 +127,10 @@ class CSlamTracker
 
   /** Corners of the image in cells empty of current features (predicted positions; none when
    * mapGivenUp()), at most maxNew; `alsoOccupied` are extra positions to avoid (e.g. shadow-filter
-   * features). */
+   * features); gridScale > 1 divides every cell of the grid into gridScale x gridScale cells. */
   std::vector<frontend::TCorner> findNewFeatureCandidates(const cv::Mat& grey, int maxNew,
-                                                          const std::vector<Vec2>& alsoOccupied = {}) const;
+                                                          const std::vector<Vec2>& alsoOccupied = {},
+                                                          int gridScale = 1) const;
 
   /** Adds inverse-depth features observed at pixels uv in `grey` (the current frame) to every mode
    * (undelayed initialisation with each mode's own camera estimate), evicting the longest-unseen

@@ -18,6 +18,7 @@
 #include <set>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 
 namespace immslam::system
 {
@@ -34,6 +35,8 @@ struct TSystemFrame
    * no measured camera motion to classify anything against (a blank start, a map given up, a view
    * the map has left entirely). */
   int newFirstMap = 0;
+  int newWatch = 0;     ///< of newShadow, the ones only watched (SLAM did not need them)
+  int retired = 0;      ///< watched features decided static that SLAM did not need (not promoted)
   double shadowMs = 0;  ///< wall time of the shadow filter
   double totalMs = 0;   ///< wall time of processFrame (image decoding excluded)
 };
@@ -60,6 +63,14 @@ class CMonoSlamSystem
      * that decides how many new features to detect ([slam] min_visible_features): a number in [0, 1],
      * or "auto": the recent fraction of pending features that ended in SLAM (see pendingWeight()). */
     std::string pending_weight = "auto";
+    /** The shadow filter keeps at least this many pending features in view, detected on a grid
+     * twice as fine as SLAM's wherever no other feature is, whether SLAM needs features or not: so
+     * that things that move are seen even while the map is complete (a still camera watching
+     * people, a camera panning a room). A watched feature decided static enters SLAM only if SLAM
+     * needs features then; otherwise it is retired: left out of SLAM, and its bearing is kept clear
+     * of new watched features for max_pending_frames frames. 0: new features only when SLAM needs
+     * them (MonoSLAMBOT's policy). */
+    int watch_features = 10;
     /** The weight of a pending_weight text: the number, or -1 for "auto".
      * \throws std::runtime_error naming [section] pending_weight if it is neither. */
     static double parsePendingWeight(const std::string& text, const std::string& section);
@@ -117,13 +128,17 @@ class CMonoSlamSystem
  private:
   shadow::TCameraMotion cameraMotion(double timestamp, double dt) const;
   /** Promotions and releases of the shadow filter's frame into SLAM, and the outcome counts of
-   * pendingWeight(); returns the pending features searched in the frame. */
+   * pendingWeight(); returns the pending features searched in the frame that are not watched. */
   int promoteFromShadow(const shadow::TShadowReport& srep, const cv::Mat& grey, bool holding, int slamInView);
   /** SLAM features rejected in handover_rejections frames in a row move to the shadow filter (at
    * their pixel in grey); returns the (SLAM id, new shadow id) pairs. */
   std::vector<std::pair<std::int64_t, std::int64_t>> handOver(const slam::TFrameReport& rep, const cv::Mat& grey);
   /** How many new features the frame wants; firstMap: they start a new first map straight in SLAM. */
   int newFeaturesWanted(int slamInView, int pendingVisible, bool holding, bool& firstMap) const;
+  /** New watched features (watch_features) where no feature is, none near a retired bearing. */
+  void addWatchedFeatures(const cv::Mat& grey, int pendingSearched, std::vector<Vec2> avoid);
+  /** Keeps the promotions of watched features only while SLAM needs features; retires the others. */
+  void retireUnneededWatched(std::vector<shadow::TPromotion>& promotions, int slamInView);
 
   TOptions m_opts;
   slam::CMonoSlamIMM::TOptions m_slamOpts;
@@ -136,6 +151,10 @@ class CMonoSlamSystem
   double m_pendingWeight = 1.0;        ///< fixed [system] pending_weight (< 0: auto)
   double m_becameSlam = 0, m_left = 0; ///< decayed counts of pending features that left the shadow filter
   std::unordered_map<std::int64_t, std::int64_t> m_trackToFeature;  ///< processMeasurements: caller's track -> feature id
+  std::unordered_set<std::int64_t> m_watched;  ///< shadow features started by watch_features
+  int m_watchedVisible = 0;                    ///< of them, pending and searched in this frame
+  /** Retired watched features: unit bearing in W and the frame until which it is kept clear. */
+  std::vector<std::pair<Vec3, std::int64_t>> m_retired;  ///< processMeasurements: caller's track -> feature id
   Vec3 m_prevR = Vec3::Zero();
   Vec4 m_prevQ = Vec4(1, 0, 0, 0);
 };
