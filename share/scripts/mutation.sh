@@ -39,12 +39,13 @@ fi
 
 header() { sed -n "s/^# $1: *//p" "$2" | head -n 1; }
 
-# Scratch copy of the tracked and new (not ignored) files. tar keeps their times, so a second run
-# rebuilds only what changed.
+# Scratch copy of the tracked and new (not ignored) files, every file with a new time: an object
+# built from a mutant in an earlier run must not look newer than its restored source (ccache makes
+# the rebuild cheap).
 echo "== mutation: scratch copy in $SRC"
 mkdir -p "$SRC"
 find "$SRC" -mindepth 1 -maxdepth 1 ! -name build -exec rm -rf {} +
-git ls-files -co --exclude-standard -z | tar --null -T - -cf - | tar -xf - -C "$SRC"
+git ls-files -co --exclude-standard -z | tar --null -T - -cf - | tar -xmf - -C "$SRC"
 
 launcher=()
 if command -v ccache > /dev/null; then
