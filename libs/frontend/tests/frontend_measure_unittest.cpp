@@ -1,5 +1,5 @@
 /* Measurements (printed, not asserted except for sanity): the ambiguity check's recall/precision
- * trade-off, detection and search timings. Uses ../shared/data images when present. */
+ * trade-off (detection and search timings: tests/benchmarks/bench_frontend.cpp). Uses ../shared/data images when present. */
 #include "test_images.h"
 
 #include <gtest/gtest.h>
@@ -129,107 +129,6 @@ TEST(Search, AmbiguityCheckTradeOff)
     reportAmbiguity("monoslam_testseq #100", loadGrey(path), M, 2.0);
   else
     std::printf("[ measure  ] %s absent: real-image ambiguity measurement skipped\n", path.c_str());
-}
-
-// ---------------------------------------------------------------------------------------------
-// Timing (printed, not asserted)
-// ---------------------------------------------------------------------------------------------
-
-TEST(Timing, DetectionAndSearch)
-{
-  std::vector<std::pair<std::string, cv::Mat>> images = {
-      {"synthetic 320x240", makeTexture(320, 240, 60)},
-      {"synthetic 640x480", makeTexture(640, 480, 61)}};
-  const std::string real320 = sharedData() + "/monoslam_testseq/rgb/000100.png";
-  const std::string real640 = sharedData() + "/visp_rbt/rgb";
-  if (std::filesystem::exists(real320))
-    images.emplace_back("monoslam_testseq 320x240", loadGrey(real320));
-  if (std::filesystem::exists(real640))
-  {
-    std::vector<std::string> files;
-    for (const auto& e : std::filesystem::directory_iterator(real640)) files.push_back(e.path());
-    std::sort(files.begin(), files.end());
-    if (!files.empty()) images.emplace_back("visp_rbt 640x480", loadGrey(files[files.size() / 2]));
-  }
-  TDetectorParams dp;
-  for (const auto& [name, img] : images)
-  {
-    if (img.empty()) continue;
-    // Typical steady state: some cells occupied.
-    std::vector<Vec2> occ;
-    for (int i = 0; i < 20; ++i) occ.emplace_back((i * 37) % img.cols, (i * 53) % img.rows);
-    std::vector<cv::KeyPoint> kps;
-    const double tFast = medianTimeUs([&] { cv::FAST(img, kps, dp.fastThreshold, true); }, 100);
-    size_t nOut = 0;
-    const double tDet =
-        medianTimeUs([&] { nOut = detectInEmptyCells(img, occ, 20, dp).size(); }, 100);
-    const double tDetEmpty = medianTimeUs([&] { detectInEmptyCells(img, {}, 48, dp); }, 100);
-    cv::Mat eig;
-    const double tEig = medianTimeUs([&] { cv::cornerMinEigenVal(img, eig, 7, 3); }, 50);
-    std::printf(
-        "[ measure  ] %-26s FAST alone %6.0f us (%zu corners); detectInEmptyCells: %6.0f us "
-        "(20 occupied -> %zu new), %6.0f us (empty grid); whole-image cornerMinEigenVal "
-        "%6.0f us\n",
-        name.c_str(), tFast, kps.size(), tDet, nOut, tDetEmpty, tEig);
-  }
-
-  // Search: ~40 features, ellipse areas 100 and 1000 px^2.
-  const cv::Mat img = makeTexture(320, 240, 62);
-  const auto feats = featurePositions(img, 40, 63);
-  std::vector<cv::Mat> templs;
-  std::vector<CFeaturePatch> patches(feats.size());
-  for (size_t i = 0; i < feats.size(); ++i)
-  {
-    patches[i].extract(img, feats[i], 5);
-    templs.push_back(patches[i].originalTemplate());
-  }
-  TSearchParams sp;
-  TSearchWorkspace ws;
-  const int defaultThreads = cv::getNumThreads();
-  for (const int threads : {0, defaultThreads, 1})  // 0: the built-in direct ZNCC
-  {
-    sp.useMatchTemplate = threads > 0;
-    for (const double area : {100.0, 1000.0})
-    {
-      cv::setNumThreads(threads > 0 ? threads : defaultThreads);
-      const Mat2 S = Mat2::Identity() * area / (3.14159265 * sp.gateChi2);
-      int found = 0;
-      const double tAll = medianTimeUs(
-          [&]
-          {
-            found = 0;
-            for (size_t i = 0; i < feats.size(); ++i)
-              found += searchInEllipse(img, templs[i], feats[i] + Vec2(1.3, -0.7), S, sp, ws).found;
-          },
-          50);
-      const double tNoWs = medianTimeUs(
-          [&]
-          {
-            for (size_t i = 0; i < feats.size(); ++i)
-              searchInEllipse(img, templs[i], feats[i] + Vec2(1.3, -0.7), S, sp);
-          },
-          50);
-      const std::string how = threads == 0
-                                  ? std::string("direct ZNCC")
-                                  : "matchTemplate, " + std::to_string(threads) + " threads";
-      std::printf(
-          "[ measure  ] search, ellipse %5.0f px^2, %-26s %6.1f us/feature with "
-          "workspace, %6.1f without (%zu features, %d found)\n",
-          area, (how + ":").c_str(), tAll / feats.size(), tNoWs / feats.size(), feats.size(),
-          found);
-    }
-  }
-  cv::setNumThreads(defaultThreads);
-  Mat2 A;
-  A << 1.1, 0.3, -0.2, 0.9;
-  cv::Mat buf;
-  const double tPred = medianTimeUs(
-      [&]
-      {
-        for (auto& pt : patches) pt.predictTemplate(A, buf);
-      },
-      50);
-  std::printf("[ measure  ] predictTemplate (11x11): %.2f us/feature\n", tPred / patches.size());
 }
 
 TEST(RealSequence, TracksCornersThroughMonoslamTestseq)

@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <ctime>
 #include <random>
 #include <string>
 #include <vector>
@@ -109,28 +108,6 @@ inline double median(std::vector<double> v)
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
-}
-
-inline double processCpuUs()
-{
-  timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e6 + ts.tv_nsec * 1e-3;
-}
-
-/** Median over reps of the CPU time (all threads of the process) of f(): robust on a shared,
- * loaded machine, where wall time mostly measures the other processes. */
-template <typename F>
-inline double medianTimeUs(F&& f, int reps)
-{
-  std::vector<double> t;
-  for (int i = 0; i < reps; ++i)
-  {
-    const double a = processCpuUs();
-    f();
-    t.push_back(processCpuUs() - a);
-  }
-  return median(t);
 }
 
 inline std::string sharedData()
