@@ -754,7 +754,6 @@ TEST(IMM, ProbabilityFloorKnownAnswer)
   p << 0.9, 0.1, 0.2, 0.8;
   const double f = 1e-3;
   CIMMEstimator imm(p, VecX::Constant(2, 0.5), f);
-  EXPECT_EQ(imm.probabilityFloor(), f);
   imm.setAllModes(VecX::Zero(1), MatX::Identity(1, 1));
   imm.mix();
   EXPECT_NEAR(imm.predictedProbabilities()[1], 0.45, 1e-15);
