@@ -362,7 +362,15 @@ void CMonoSlamSystem::addWatchedFeatures(const cv::Mat& grey, int pendingSearche
   for (const auto& f : m_shadow->features())
     if (m_watched.count(f.id)) held.insert(f.id);
   m_watched.swap(held);
-  const int want = std::clamp(m_opts.watch_features - pendingSearched, 0, m_slam->options().max_new_features_per_frame);
+  // A translating camera renews its features as the view changes: new ones reach the shadow filter
+  // anyway. Watching is for a camera that the bank says does not translate (its map stays complete).
+  double pNotTranslating = 0;
+  const VecX mu = m_slam->modelProbabilities();
+  for (int i = 0; i < mu.size(); ++i)
+    if (m_slam->models()[i].family != motion::EMotionFamily::General) pNotTranslating += mu[i];
+  const int want = pNotTranslating < 0.5 ? 0
+                                         : std::clamp(m_opts.watch_features - pendingSearched, 0,
+                                                      m_slam->options().max_new_features_per_frame);
   if (want == 0) return;
   // Retired bearings, seen through the current orientation (a still or rotating camera sees them
   // there; a translating one only roughly, for a while), stay clear of new watched features.

@@ -63,10 +63,11 @@ class CMonoSlamSystem
      * that decides how many new features to detect ([slam] min_visible_features): a number in [0, 1],
      * or "auto": the recent fraction of pending features that ended in SLAM (see pendingWeight()). */
     std::string pending_weight = "auto";
-    /** The shadow filter keeps at least this many pending features in view, detected on a grid
-     * twice as fine as SLAM's wherever no other feature is, whether SLAM needs features or not: so
-     * that things that move are seen even while the map is complete (a still camera watching
-     * people, a camera panning a room). A watched feature decided static enters SLAM only if SLAM
+    /** While the IMM bank says the camera does not translate (stationary and rotation families
+     * above 0.5), the shadow filter keeps at least this many pending features in view, detected on a
+     * grid twice as fine as SLAM's wherever no other feature is, whether SLAM needs features or not:
+     * so that things that move are seen even while the map is complete (a still camera watching
+     * people, a camera panning a room; a translating camera renews its features anyway). A watched feature decided static enters SLAM only if SLAM
      * needs features then; otherwise it is retired: left out of SLAM, and its bearing is kept clear
      * of new watched features for max_pending_frames frames. 0: new features only when SLAM needs
      * them (MonoSLAMBOT's policy). */
