@@ -478,12 +478,9 @@ TEST(RobustConditions, VeryFastRotation)
     const auto f = figures("fast rotation, " + cfg, run, 60, 120);
     EXPECT_EQ(run.est.size(), seq.frames.size());
     // Lost in the fast motion after the rotation, found again by relocalisation (held ATE 0.0415 /
-    // 0.0475 / 0.1405 measured; 2.4 / 4.2 when the map was deleted and rebuilt at another scale);
-    // recovered after 1 / 0 / 2 frames; whole run 0.0202 / 0.0188 / 0.0198. The full system's held
-    // ATE was 0.0853 before its watched features ([system] watch_features; 0.0842 with 0): the
-    // features watched during the 2 s rotation cost scale (scale ratio after the event 0.10 against
-    // 0.14), a known loss (doc/shadow.md).
-    EXPECT_LT(f.ateAfterHeld, perConfig(cfg, 0.050, 0.057, 0.169));
+    // 0.0475 / 0.0853 measured; 2.4 / 4.2 when the map was deleted and rebuilt at another scale);
+    // recovered after 1 / 0 / 3 frames; whole run 0.0202 / 0.0188 / 0.0195.
+    EXPECT_LT(f.ateAfterHeld, perConfig(cfg, 0.050, 0.057, 0.103));
     EXPECT_LE(f.recoveryFrames, 4);
     EXPECT_LT(f.ateAll, perConfig(cfg, 0.0243, 0.0226, 0.0234));
   }
@@ -559,17 +556,17 @@ TEST(RobustConditions, StillCameraWatchingOnlyMovingObjects)
                 cfg.c_str(), run.est.size(), maxPos, maxRotDeg, medianOf(run.matched, run, 0, 1000),
                 100 * eval::median(run.onObjects), domText.c_str(), run.pendingWeight);
     EXPECT_EQ(run.est.size(), seq.frames.size());
-    // The drift of the still camera, at ~1.2x the measured values: max |r| 1.612 / 1.781 / 2.150
-    // units, max rotation 179.5 / 159.7 / 180.0 deg (35 units with outlier rejection off, issue 30).
-    // The single model's and the full system's rotation reach 180 deg (turned around): only their
-    // position is bounded; imm7's is held below 170 deg (1.2x would pass 180). The full system was
-    // at 1.563 units and 45.6 deg before its watched features ([system] watch_features; the same with
-    // 0): features watched while the bank believes the camera still take corners of the boxes, the
-    // only texture there is, a known loss (doc/shadow.md). The scenario itself: 91 / 93 / 82 % of the
-    // matches on the boxes, median 11 / 11 / 9 matched.
-    EXPECT_LT(maxPos, perConfig(cfg, 1.94, 2.14, 2.58));
-    if (cfg == "ini/imm7.ini") EXPECT_LT(maxRotDeg, 170.0);
-    EXPECT_GE(eval::median(run.onObjects), 0.8);
+    // The drift of the still camera, at ~1.2x the measured values (2026-11-27): max |r| 1.612 /
+    // 1.781 / 1.563 units, max rotation 179.5 / 159.7 / 45.6 deg (35 units with outlier rejection
+    // off, issue 30). The single model's rotation has already reached 180 deg (turned around): only
+    // its position is bounded; imm7's is held below 170 deg (1.2x would pass 180). The scenario itself: 91 / 93 / 100 % of the matches on the boxes,
+    // median 11 / 11 / 5 matched.
+    EXPECT_LT(maxPos, perConfig(cfg, 1.94, 2.14, 1.88));
+    if (cfg != "ini/single.ini")
+    {
+      EXPECT_LT(maxRotDeg, cfg == "ini/imm7.ini" ? 170.0 : 55.0);
+    }
+    EXPECT_GE(eval::median(run.onObjects), 0.85);
     EXPECT_GE(medianOf(run.matched, run, 0, 1000), perConfig(cfg, 9, 9, 4));
   }
 }
