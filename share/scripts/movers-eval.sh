@@ -40,7 +40,7 @@ count() {  # CLASSIFICATIONS MASK_FOLDER -> "static->dynamic static_total moving
   echo "${sd:-0 0} ${ms:-0 0}"
 }
 
-printf '%-6s %-8s %-8s %-8s %-8s %-9s %-9s %-9s %s\n' seed s->d static m->s moving ate_movers ate_static imm7_static ratio
+printf '%-6s %-8s %-8s %-8s %-8s %-9s %-9s %-9s %s\n' seed 's->d' static 'm->s' moving ate_movers ate_static imm7_static ratio
 tot_sd=0 tot_s=0 tot_ms=0 tot_m=0
 rows=$(mktemp); trap 'rm -f "$rows"' EXIT
 for s in "${SEEDS[@]}"; do
