@@ -103,9 +103,7 @@ shadow::TCameraMotion CMonoSlamSystem::cameraMotion(double timestamp, double dt)
   m.cov_W_C = J * m_slam->cameraPoseCovariance() * J.transpose();
   // Increment covariance from the velocities' (t = v dt, dtheta = w dt, first order).
   m.cov_increment = m_slam->velocityCovariance() * dt * dt;
-  const VecX mu = m_slam->modelProbabilities();
-  for (int i = 0; i < mu.size(); ++i)
-    if (m_slam->models()[i].family != motion::EMotionFamily::General) m.pNotTranslating += mu[i];
+  m.pNotTranslating = notTranslatingProbability();
   return m;
 }
 
@@ -331,6 +329,15 @@ const TSystemFrame& CMonoSlamSystem::processMeasurements(double timestamp,
   return m_frame;
 }
 
+double CMonoSlamSystem::notTranslatingProbability() const
+{
+  double p = 0;
+  const VecX mu = m_slam->modelProbabilities();
+  for (int i = 0; i < mu.size(); ++i)
+    if (m_slam->models()[i].family != motion::EMotionFamily::General) p += mu[i];
+  return p;
+}
+
 void CMonoSlamSystem::retireWatched(std::vector<shadow::TPromotion>& promotions)
 {
   if (m_watched.empty()) return;
@@ -361,11 +368,7 @@ void CMonoSlamSystem::addWatchedFeatures(const cv::Mat& grey, int pendingSearche
   m_watched.swap(held);
   // A translating camera renews its features as the view changes: new ones reach the shadow filter
   // anyway. Watching is for a camera that the bank says does not translate (its map stays complete).
-  double pNotTranslating = 0;
-  const VecX mu = m_slam->modelProbabilities();
-  for (int i = 0; i < mu.size(); ++i)
-    if (m_slam->models()[i].family != motion::EMotionFamily::General) pNotTranslating += mu[i];
-  const int want = pNotTranslating < 0.5 ? 0
+  const int want = notTranslatingProbability() < 0.5 ? 0
                                          : std::clamp(m_opts.watch_features - pendingSearched, 0,
                                                       m_slam->options().max_new_features_per_frame);
   if (want == 0) return;

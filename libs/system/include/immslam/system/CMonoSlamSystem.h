@@ -128,6 +128,8 @@ class CMonoSlamSystem
 
  private:
   shadow::TCameraMotion cameraMotion(double timestamp, double dt) const;
+  /** The bank's probability that the camera does not translate (stationary and rotation families). */
+  double notTranslatingProbability() const;
   /** Promotions and releases of the shadow filter's frame into SLAM, and the outcome counts of
    * pendingWeight(); returns the pending features searched in the frame that are not watched. */
   int promoteFromShadow(const shadow::TShadowReport& srep, const cv::Mat& grey, bool holding, int slamInView);
