@@ -16,7 +16,7 @@ constexpr int kGridIntervals = 64;    ///< grid over [0, wMax] before the Gauss-
 constexpr int kGaussNewtonSteps = 10;
 constexpr int kPowerDirections = 16;  ///< image directions over a half turn (lambda(d) = lambda(-d))
 
-using Mat4x12 = Eigen::Matrix<double, 4, 18>;  ///< d r / d [uv0, uv_m, uv_k, pose_m, pose_k]
+using Mat4x18 = Eigen::Matrix<double, 4, 18>;  ///< d r / d [uv0, uv_m, uv_k, pose_m, pose_k]
 using Mat18 = Eigen::Matrix<double, 18, 18>;
 
 /** Everything the test needs at one inverse distance w. */
@@ -41,7 +41,7 @@ struct TInputs
 TAtW atW(const TInputs& in, double w)
 {
   TAtW a;
-  Mat4x12 J = Mat4x12::Zero();
+  Mat4x18 J = Mat4x18::Zero();
   for (int j = 0; j < 2; ++j)
   {
     const Mat3& R = in.R[j];
