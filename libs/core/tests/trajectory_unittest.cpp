@@ -2,6 +2,7 @@
  * normalization, errors naming file and line. */
 #include <gtest/gtest.h>
 #include <immslam/core/TTrajectory.h>
+#include <immslam/math/random_samples.h>
 
 #include <cmath>
 #include <filesystem>
@@ -13,16 +14,8 @@ using namespace immslam;
 
 namespace
 {
-Vec4 randomQuat(std::mt19937& rng)
-{
-  std::normal_distribution<double> n;
-  return Vec4(n(rng), n(rng), n(rng), n(rng)).normalized();
-}
-Vec3 randomVec3(std::mt19937& rng, double s = 1.0)
-{
-  std::normal_distribution<double> n(0, s);
-  return Vec3(n(rng), n(rng), n(rng));
-}
+using math::randomQuat;
+using math::randomVec3;
 std::string tempPath(const std::string& name)
 {
   return (std::filesystem::path(::testing::TempDir()) / ("immslam_core_" + name)).string();

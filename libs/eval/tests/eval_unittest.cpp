@@ -12,6 +12,7 @@
 #include <immslam/eval/statistics.h>
 #include <immslam/math/numerical_jacobian.h>
 #include <immslam/math/quaternion.h>
+#include <immslam/math/random_samples.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
@@ -28,16 +29,8 @@ using namespace immslam::eval;
 
 namespace
 {
-Vec4 randomQuat(std::mt19937& rng)
-{
-  std::normal_distribution<double> n;
-  return Vec4(n(rng), n(rng), n(rng), n(rng)).normalized();
-}
-Vec3 randomVec3(std::mt19937& rng, double s = 1.0)
-{
-  std::normal_distribution<double> n(0, s);
-  return Vec3(n(rng), n(rng), n(rng));
-}
+using math::randomQuat;
+using math::randomVec3;
 TSim3 randomSim3(std::mt19937& rng, bool withScale)
 {
   std::uniform_real_distribution<double> u(0.2, 5.0);

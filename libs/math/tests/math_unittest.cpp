@@ -9,6 +9,7 @@
 #include <immslam/math/numerical_jacobian.h>
 #include <immslam/math/parallel.h>
 #include <immslam/math/quaternion.h>
+#include <immslam/math/random_samples.h>
 
 #include <random>
 
@@ -17,16 +18,6 @@ using namespace immslam::math;
 
 namespace
 {
-Vec4 randomQuat(std::mt19937& rng)
-{
-  std::normal_distribution<double> n;
-  return Vec4(n(rng), n(rng), n(rng), n(rng)).normalized();
-}
-Vec3 randomVec3(std::mt19937& rng, double s = 1.0)
-{
-  std::normal_distribution<double> n(0, s);
-  return Vec3(n(rng), n(rng), n(rng));
-}
 }  // namespace
 
 TEST(Quaternion, RotateMatchesEigenAndJacobians)

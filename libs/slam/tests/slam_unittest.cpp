@@ -762,15 +762,29 @@ std::vector<TRelocPoint> planeMap(const cv::Mat& tex, const Mat3& K, const camer
   }
   return pts;
 }
+/** The map of the textured plane (texture seed 5) seen by the relocalisation tests' camera. */
+struct TPlaneScene
+{
+  camera::CCameraModel::Ptr cam;
+  Mat3 K;
+  cv::Mat tex;
+  std::vector<TRelocPoint> pts;
+};
+
+TPlaneScene texturedPlaneScene()
+{
+  TPlaneScene s;
+  s.cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
+  s.K << 200, 0, 160, 0, 200, 120, 0, 0, 1;
+  s.tex = randomTexture(5);
+  s.pts = planeMap(s.tex, s.K, *s.cam);
+  return s;
+}
 }  // namespace
 
 TEST(Relocalisation, FindsThePoseOfATexturedPlaneAndNothingElsewhere)
 {
-  const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
-  Mat3 K;
-  K << 200, 0, 160, 0, 200, 120, 0, 0, 1;
-  const cv::Mat tex = randomTexture(5);
-  const std::vector<TRelocPoint> pts = planeMap(tex, K, *cam);
+  const auto [cam, K, tex, pts] = texturedPlaneScene();
   ASSERT_GE(pts.size(), 30u);
   // A second view: turned by 4 degrees (mostly a pan) and moved by 0.35 units.
   const Vec4 q1 = math::quatFromRotationVector(Vec3(0.01, 0.07, 0.015));
@@ -835,11 +849,7 @@ TEST(Relocalisation, KidnappedCameraIsFoundWithBoundedPoseError)
   // texture seed 5). Measured (centre, angle): (0.0180, 0.0045 rad), (0.0225, 0.0077),
   // (0.0237, 0.0056), (0.0135, 0.0053); 11-17 PnP inliers. A roll of 0.2 rad or more (templates are
   // not rotated) gave no pose at all: such views are not part of this test.
-  const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
-  Mat3 K;
-  K << 200, 0, 160, 0, 200, 120, 0, 0, 1;
-  const cv::Mat tex = randomTexture(5);
-  const std::vector<TRelocPoint> pts = planeMap(tex, K, *cam);
+  const auto [cam, K, tex, pts] = texturedPlaneScene();
   ASSERT_GE(pts.size(), 30u);
   struct TKidnap
   {
