@@ -20,6 +20,10 @@ printf '[input]\n' > "$TMP/empty.ini"
   echo "\`cy\`, \`fx\`, \`fy\`, \`dist\`, \`distortion_model\` = \`none\`, \`plumb_bob\` or \`kannala_brandt\`; or"
   echo "\`model = pinhole|opencv|davison|fisheye\` with \`kd1\` (davison) or \`dist\` (fisheye: \`[k1 k2 k3 k4]\`); or"
   echo "\`calib_file = path\`) is used for live cameras. Precedence: \`--calib\` > \`[camera]\` > the input's own."
+  echo
+  echo "The defaults are the recommended configuration (\`ini/imm7-shadow.ini\` only names its defining keys)."
+  echo "A config written for an older version that holds a removed or moved key stops with an error naming"
+  echo "the key and what replaced it (for example \`[shadow] min_ncc: moved to [search] min_ncc\`)."
   "$BIN" "$TMP/empty.ini" --print-config | awk '
     /^\[/ { sec=$0; gsub(/[\[\]]/, "", sec); printf "\n## [%s]\n\n| key | default | meaning |\n|---|---|---|\n", sec; next }
     /=/ {

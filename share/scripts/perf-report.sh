@@ -522,7 +522,7 @@ for N in sizes:
 md.append("\n`bayes::ekfUpdate` of one mode, n x n covariance, m scalar measurements (m/2 features), ms:\n\n")
 md.append(table(["N", "n", "m = 40", "m = 60", "m = 80"], rows))
 rows = []
-names = ["stationary", "stationary:0.1 (jitter)", "rotation", "general"]
+names = ["stationary", "stationary, shake 0.1 px", "rotation", "general"]
 for N in sizes:
     r = [str(N), "%d" % (13 + 6 * N)]
     for fam in range(4):

@@ -39,7 +39,7 @@ using immslam::VecX;
 
 /** The banks compared: the paper's baseline and the shipped 7-model bank (ini/single.ini, ini/imm7.ini). */
 const char* const kSingle = "general:1";
-const char* const kImm7 = "stationary:0.1 rotation:0.1 rotation:0.5 rotation:1 general:0.1 general:0.5 general:1";
+const char* const kImm7 = "stationary rotation:0.1 rotation:0.5 rotation:1 general:0.1 general:0.5 general:1";
 const char* bankSpec(int which) { return which == 1 ? kSingle : kImm7; }
 const char* bankLabel(int which) { return which == 1 ? "single" : "imm7"; }
 
@@ -355,7 +355,7 @@ motion::TMotionModel modelOf(int family)
   switch (family)
   {
     case 0: return motion::TMotionModel{motion::EMotionFamily::Stationary, 0, 0.0, "stationary"};
-    case 1: return motion::TMotionModel{motion::EMotionFamily::Stationary, 0, 0.1, "stationary:0.1"};
+    case 1: return motion::TMotionModel{motion::EMotionFamily::Stationary, 0, 0.1, "stationary, shake 0.1 px"};
     case 2: return motion::TMotionModel{motion::EMotionFamily::Rotation, 0, 1.0, "rotation"};
     default: return motion::TMotionModel{motion::EMotionFamily::General, 1.0, 1.0, "general"};
   }

@@ -79,6 +79,7 @@ int fuzzIni(const std::uint8_t* data, std::size_t size)
   }
   // Every options class of the system: loading validates (errors name the section).
   expectClean("[system]", "system options", [&] { system::CMonoSlamSystem::TOptions().loadFromConfigFile(cfg, "system"); });
+  expectClean("[search]", "search options", [&] { system::CMonoSlamSystem::TSearchOptions().loadFromConfigFile(cfg, "search"); });
   expectClean("[slam]", "slam options", [&] { slam::CMonoSlamIMM::TOptions().loadFromConfigFile(cfg, "slam"); });
   expectClean("[ransac]", "ransac options", [&] { slam::COnePointRansac::TOptions().loadFromConfigFile(cfg, "ransac"); });
   expectClean("[shadow]", "shadow options", [&] { shadow::CShadowFilter::TOptions().loadFromConfigFile(cfg, "shadow"); });

@@ -2,6 +2,10 @@
 #include "test_helpers.h"
 
 #include <immslam/camera/CCameraModel.h>
+#include <immslam/system/CMonoSlamSystem.h>
+
+#include <mrpt/config/CConfigFile.h>
+#include <mrpt/config/CConfigFileMemory.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -23,6 +27,35 @@ TEST(AppCli, UsageAndHelp)
   EXPECT_EQ(runApp({sourceDir() + "/ini/single.ini", "--frames", "x"}), 2);
   EXPECT_EQ(runApp({sourceDir() + "/ini/single.ini", "--bogus"}), 2);
   EXPECT_EQ(runApp({sourceDir() + "/ini/single.ini", "--set", "nodot"}), 2);
+}
+
+TEST(AppConfig, CodeDefaultsAreTheRecommendedConfiguration)
+{
+  // ini/imm7-shadow.ini only names its defining keys: every estimator key at its code default gives the
+  // same effective configuration as the shipped file.
+  mrpt::config::CConfigFile shipped(sourceDir() + "/ini/imm7-shadow.ini");
+  mrpt::config::CConfigFileMemory empty(""), fromDefaults, fromShipped;
+  system::CMonoSlamSystem::effectiveConfig(empty, fromDefaults);
+  system::CMonoSlamSystem::effectiveConfig(shipped, fromShipped);
+  std::string a, b;
+  fromDefaults.getContent(a);
+  fromShipped.getContent(b);
+  EXPECT_GT(a.size(), 1000u);
+  EXPECT_EQ(a, b);
+}
+
+TEST(AppConfig, RemovedKeysNameWhatReplacedThem)
+{
+  for (const auto& [key, why] : system::CMonoSlamSystem::removedKeys())
+  {
+    EXPECT_TRUE(why.rfind("removed", 0) == 0 || why.rfind("moved to [", 0) == 0) << key << ": " << why;
+    const auto section = key.substr(1, key.find(']') - 1);
+    const auto name = key.substr(key.find(']') + 2);
+    const auto known = system::CMonoSlamSystem::knownKeys();
+    ASSERT_TRUE(known.count(section)) << key;
+    EXPECT_EQ(known.at(section).count(name), 0u) << key << " is still a key";
+  }
+  EXPECT_GE(system::CMonoSlamSystem::removedKeys().size(), 20u);
 }
 
 TEST(AppCli, BadConfigAndInputExitWithOne)

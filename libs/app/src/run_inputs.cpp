@@ -30,7 +30,20 @@ std::string resolvePath(const std::string& p, const std::string& configDir)
   return p;
 }
 
-/** Unknown sections and keys are errors that name them. */
+/** Keys of older configs that were removed or moved: an error that names the key and what replaced it. */
+void checkRemovedKeys(const mrpt::config::CConfigFileBase& cfg, const std::string& section)
+{
+  std::vector<std::string> keys;
+  cfg.getAllKeys(section, keys);
+  const auto& removed = system::CMonoSlamSystem::removedKeys();
+  for (const auto& k : keys)
+  {
+    const auto it = removed.find("[" + section + "] " + k);
+    if (it != removed.end()) throw std::runtime_error("[" + section + "] " + k + ": " + it->second);
+  }
+}
+
+/** Unknown sections and keys are errors that name them (removed keys with what replaced them). */
 void checkConfigKeys(const mrpt::config::CConfigFileBase& cfg)
 {
   auto known = system::CMonoSlamSystem::knownKeys();
@@ -50,6 +63,7 @@ void checkConfigKeys(const mrpt::config::CConfigFileBase& cfg)
       for (const auto& [name, keys] : known) list += (list.empty() ? "" : ", ") + name;
       throw std::runtime_error("unknown section [" + s + "] (known: " + list + ")");
     }
+    checkRemovedKeys(cfg, s);
     core::checkKnownKeys(cfg, s, it->second);
   }
 }

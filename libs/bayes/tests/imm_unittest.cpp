@@ -421,7 +421,7 @@ TEST(IMM, MixingEqualsTextbookWithZerosInTheMatrix)
 
 TEST(IMM, MixingEqualsTextbookForABlockStructuredMatrix)
 {
-  // The shipped bank's matrix (imm.general_entry = evidence): rows 0-3 (stationary, rotation) have
+  // The default matrix of the 7-model bank (TIMMBankOptions::transitionMatrix): rows 0-3 (stationary, rotation) have
   // zeros in columns 4-6 (general) and keep the rest on the diagonal. Two supports, two common terms.
   MatX pi = defaultMarkov(7, 0.995);
   for (int j = 0; j < 4; ++j)

@@ -8,17 +8,8 @@ namespace immslam::shadow
 {
 void CShadowFilter::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-  IMMSLAM_LOAD_DOUBLE(sigma_pixel);
-  IMMSLAM_LOAD_DOUBLE(init_rho);
-  IMMSLAM_LOAD_DOUBLE(init_rho_std);
   IMMSLAM_LOAD_DOUBLE(init_velocity_std_px);
   IMMSLAM_LOAD_DOUBLE(sigma_accel_px);
-  IMMSLAM_LOAD_INT(ekf_iterations);
-  IMMSLAM_LOAD_INT(patch_half_size);
-  IMMSLAM_LOAD_BOOL(warp_patches);
-  IMMSLAM_LOAD_DOUBLE(min_ncc);
-  IMMSLAM_LOAD_DOUBLE(search_probability);
-  IMMSLAM_LOAD_DOUBLE(max_search_half_extent_px);
   IMMSLAM_LOAD_DOUBLE(alpha);
   IMMSLAM_LOAD_INT(min_test_frames);
   IMMSLAM_LOAD_INT(dynamic_rejections);
@@ -27,46 +18,29 @@ void CShadowFilter::TOptions::loadFromConfigFile(const mrpt::config::CConfigFile
   IMMSLAM_LOAD_INT(static_min_frames);
   IMMSLAM_LOAD_DOUBLE(static_min_velocity_px);
   IMMSLAM_LOAD_DOUBLE(static_power);
-  IMMSLAM_LOAD_BOOL(static_power_worst_case);
-  IMMSLAM_LOAD_DOUBLE(increment_cov_scale);
   IMMSLAM_LOAD_INT(max_pending_frames);
   IMMSLAM_LOAD_INT(max_missed_frames);
   IMMSLAM_LOAD_INT(dynamic_max_missed_frames);
   IMMSLAM_LOAD_INT(max_features);
-  IMMSLAM_LOAD_DOUBLE(id_offset);
-  IMMSLAM_LOAD_DOUBLE(min_inverse_distance);
   validate(s);
 }
 
 void CShadowFilter::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
 {
-  MRPT_SAVE_CONFIG_VAR_COMMENT(sigma_pixel, "image measurement noise std (px)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(init_rho, "prior mean of w, the inverse distance (1 = unit distance)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(init_rho_std, "prior std of w (its 95% region should include 0 = infinity)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(init_velocity_std_px, "feature velocity prior std (px/frame at unit depth)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(sigma_accel_px, "feature acceleration noise (px/frame^2 at unit depth)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(ekf_iterations, "1 = EKF update, >1 = iterated EKF update");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(patch_half_size, "template half size (5 -> 11x11 px)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(warp_patches, "predict patch appearance by an affine warp");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(min_ncc, "minimum zero-mean NCC of a match");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(search_probability, "probability of the search ellipse (2 dof)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(max_search_half_extent_px, "clip of very large search regions (px)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(alpha, "significance of the three-ray test (static features called dynamic per test)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(min_test_frames, "first test once a feature's views span this many frames");
   MRPT_SAVE_CONFIG_VAR_COMMENT(dynamic_rejections, "dynamic when this many of the last dynamic_window tests reject");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(dynamic_window, "");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(dynamic_window, "the number of recent tests dynamic_rejections counts in");
   MRPT_SAVE_CONFIG_VAR_COMMENT(static_acceptances, "static needs this many consecutive accepted tests,");
   MRPT_SAVE_CONFIG_VAR_COMMENT(static_min_frames, "a track spanning at least this many frames,");
   MRPT_SAVE_CONFIG_VAR_COMMENT(static_min_velocity_px, "and power against motions of this image speed (px/frame)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(static_power, "detection probability that defines that power");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(static_power_worst_case, "power in every direction (true) or averaged over directions");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(increment_cov_scale, "inflation of the SLAM increments' covariance");
   MRPT_SAVE_CONFIG_VAR_COMMENT(max_pending_frames, "undecided features are dropped after this many frames");
   MRPT_SAVE_CONFIG_VAR_COMMENT(max_missed_frames, "pending features dropped after this many misses in a row");
   MRPT_SAVE_CONFIG_VAR_COMMENT(dynamic_max_missed_frames, "dynamic features dropped after this many misses in a row");
   MRPT_SAVE_CONFIG_VAR_COMMENT(max_features, "maximum number of features held");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(id_offset, "first feature id when no id allocator is given");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(min_inverse_distance, "w clamp when placing tracks in the world");
 }
 
 void CShadowFilter::TOptions::validate(const std::string& s) const

@@ -273,10 +273,10 @@ TEST(ShadowOptions, LoadSaveAndErrors)
   o2.loadFromConfigFile(mrpt::config::CConfigFileMemory(text), "shadow");
   EXPECT_EQ(o2.alpha, 0.01);
   EXPECT_EQ(o2.static_acceptances, 7);
-  EXPECT_EQ(core::knownKeys(o, "shadow").size(), 27u);
+  EXPECT_EQ(core::knownKeys(o, "shadow").size(), 14u);  // noise, prior and search come from [slam] and [search]
   EXPECT_THROW(o2.loadFromConfigFile(mrpt::config::CConfigFileMemory("[shadow]\nalpha = 0.9\n"), "shadow"),
                std::runtime_error);
-  EXPECT_THROW(o2.loadFromConfigFile(mrpt::config::CConfigFileMemory("[shadow]\nsigma_pixel = abc\n"), "shadow"),
+  EXPECT_THROW(o2.loadFromConfigFile(mrpt::config::CConfigFileMemory("[shadow]\nsigma_accel_px = abc\n"), "shadow"),
                std::runtime_error);
   EXPECT_THROW(CShadowFilter(CShadowFilter::TOptions(), nullptr), std::runtime_error);
 }

@@ -20,11 +20,6 @@ void CSlamTracker::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileB
   IMMSLAM_LOAD_DOUBLE(init_linear_velocity_std_px);
   IMMSLAM_LOAD_DOUBLE(init_angular_velocity_std_px);
   IMMSLAM_LOAD_DOUBLE(frame_rate_hz);
-  IMMSLAM_LOAD_INT(patch_half_size);
-  IMMSLAM_LOAD_BOOL(warp_patches);
-  IMMSLAM_LOAD_DOUBLE(min_ncc);
-  IMMSLAM_LOAD_DOUBLE(search_probability);
-  IMMSLAM_LOAD_DOUBLE(max_search_half_extent_px);
   IMMSLAM_LOAD_DOUBLE(expand_search_factor);
   IMMSLAM_LOAD_DOUBLE(expand_below_fraction);
   IMMSLAM_LOAD_INT(fast_threshold);
@@ -63,21 +58,16 @@ void CSlamTracker::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, 
   MRPT_SAVE_CONFIG_VAR_COMMENT(init_linear_velocity_std_px, "initial linear velocity std (px/frame at unit depth)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(init_angular_velocity_std_px, "initial angular velocity std (px/frame)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(frame_rate_hz, "nominal frame rate (Hz); 0 = from the first timestamps");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(patch_half_size, "template half size (5 -> 11x11 px)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(warp_patches, "predict patch appearance by an affine warp");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(min_ncc, "minimum zero-mean NCC of a match");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(search_probability, "probability of the search ellipse (2 dof)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(max_search_half_extent_px, "clip of very large search regions (px)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(expand_search_factor, "expanded search: ellipse axes times this (1 = off)...");
   MRPT_SAVE_CONFIG_VAR_COMMENT(expand_below_fraction, "...when fewer than this fraction of searches succeed");
   MRPT_SAVE_CONFIG_VAR_COMMENT(fast_threshold, "FAST corner threshold (grey levels)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(grid_cols, "new features go to empty cells of a grid_cols x grid_rows grid");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(grid_rows, "");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(grid_rows, "rows of that grid");
   MRPT_SAVE_CONFIG_VAR_COMMENT(min_corner_distance_px, "minimum distance of a new feature to others (px)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(border_px, "no new features closer to the border (px)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(min_shi_tomasi, "minimum normalized Shi-Tomasi response of a new feature");
   MRPT_SAVE_CONFIG_VAR_COMMENT(min_visible_features, "add features when fewer are predicted in the image");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(max_new_features_per_frame, "");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(max_new_features_per_frame, "at most this many new features per frame");
   MRPT_SAVE_CONFIG_VAR_COMMENT(initial_features, "features initialised at the first frame");
   MRPT_SAVE_CONFIG_VAR_COMMENT(max_map_features, "map size bound (longest-unseen features evicted)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(delete_min_predictions, "deletion rule: after this many searches...");
@@ -135,11 +125,9 @@ void TIMMBankOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c,
   IMMSLAM_LOAD_STRING(models);
   IMMSLAM_LOAD_VECTOR(transition_matrix);
   IMMSLAM_LOAD_DOUBLE(transition_stay);
-  IMMSLAM_LOAD_STRING(general_entry);
   IMMSLAM_LOAD_VECTOR(prior);
   IMMSLAM_LOAD_DOUBLE(probability_floor);
   IMMSLAM_LOAD_DOUBLE(dormant_below);
-  IMMSLAM_LOAD_BOOL(lazy_prediction);
   IMMSLAM_LOAD_DOUBLE(shake_px);
   core::requireInRange(shake_px, 0, 100, s, "shake_px");
   const int r = static_cast<int>(parseModels().size());
@@ -164,16 +152,14 @@ std::string joinNumbers(const std::vector<double>& v)
 void TIMMBankOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
 {
   c.write(s, "models", models, mrpt::config::MRPT_SAVE_NAME_PADDING(), mrpt::config::MRPT_SAVE_VALUE_PADDING(),
-          "stationary[:JITTER_PX] | rotation:SIGMA_PX | general:SIGMA_PX[:SIGMA_ANG_PX] (noise in px)");
+          "stationary | rotation:SIGMA_PX | general:SIGMA_PX[:SIGMA_ANG_PX] (noise in px; the shake of every model is shake_px)");
   c.write(s, "transition_matrix", joinNumbers(transition_matrix), mrpt::config::MRPT_SAVE_NAME_PADDING(),
           mrpt::config::MRPT_SAVE_VALUE_PADDING(), "r x r Markov matrix, row-major, rows sum to 1 ([] = from transition_stay)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(transition_stay, "diagonal of the default Markov matrix");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(general_entry, "markov: every mode may switch into a general one; evidence: not from a mode with v = 0 (doc/imm.md; shapes the default matrix, an explicit transition_matrix is used as given)");
   c.write(s, "prior", joinNumbers(prior), mrpt::config::MRPT_SAVE_NAME_PADDING(), mrpt::config::MRPT_SAVE_VALUE_PADDING(),
           "initial model probabilities ([] = uniform)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(probability_floor, "lower bound of every model probability");
   MRPT_SAVE_CONFIG_VAR_COMMENT(dormant_below, "modes below this probability given the frame are not updated (0 = exact IMM)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(lazy_prediction, "modes dormant in the previous frame: covariance predicted only if needed (exact)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(shake_px, "zero-mean angular shake of the camera in every model, px per frame (random walk; 0 = none)");
 }
 
@@ -209,9 +195,9 @@ std::vector<motion::TMotionModel> TIMMBankOptions::parseModels() const
           throw std::invalid_argument("noise '" + parts[i] + "' is not a number > 0");
         sig.push_back(v);
       }
-      if (m.family == motion::EMotionFamily::Stationary && sig.size() > 1)
-        throw std::invalid_argument("stationary takes at most one value (angular jitter)");
-      if (m.family == motion::EMotionFamily::Stationary) m.sigmaAngularPx = sig.empty() ? 0.0 : sig[0];
+      if (m.family == motion::EMotionFamily::Stationary && !sig.empty())
+        throw std::invalid_argument("stationary takes no value (the angular shake of every model, the still one too, is [imm] shake_px)");
+      if (m.family == motion::EMotionFamily::Stationary) m.sigmaAngularPx = 0.0;  // its only noise is the shake
       if (m.family == motion::EMotionFamily::Rotation && sig.size() != 1)
         throw std::invalid_argument("rotation takes one noise value");
       if (m.family == motion::EMotionFamily::General && (sig.empty() || sig.size() > 2))
@@ -243,14 +229,15 @@ std::vector<motion::TMotionModel> TIMMBankOptions::parseModels() const
 MatX TIMMBankOptions::transitionMatrix(int r) const
 {
   MatX pi(r, r);
-  if (general_entry != "markov" && general_entry != "evidence")
-    throw std::runtime_error("[imm] general_entry: '" + general_entry + "' is not 'markov' or 'evidence'");
   if (transition_matrix.empty())
   {
     core::requireInRange(transition_stay, 0, 1, "imm", "transition_stay");
     pi.setConstant(r > 1 ? (1.0 - transition_stay) / (r - 1) : 0.0);
     pi.diagonal().setConstant(r > 1 ? transition_stay : 1.0);
-    if (general_entry == "evidence" && r > 1)
+    // No Markov switch from a still or rotating mode (v = 0) into a general one: a general mode entered
+    // by mixing would start from a zero velocity; the general modes keep their own velocity and win by
+    // evidence (doc/imm.md).
+    if (r > 1)
     {
       const auto models = parseModels();
       if (static_cast<int>(models.size()) != r) throw std::logic_error("[imm] transition matrix: r differs from the models");

@@ -43,6 +43,66 @@ double CMonoSlamSystem::TOptions::parsePendingWeight(const std::string& text, co
   return w;
 }
 
+void CMonoSlamSystem::TSearchOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+  IMMSLAM_LOAD_INT(patch_half_size);
+  IMMSLAM_LOAD_BOOL(warp_patches);
+  IMMSLAM_LOAD_DOUBLE(min_ncc);
+  IMMSLAM_LOAD_DOUBLE(search_probability);
+  IMMSLAM_LOAD_DOUBLE(max_search_half_extent_px);
+  core::requireInRange(patch_half_size, 2, 15, s, "patch_half_size");
+  core::requireInRange(min_ncc, -1, 1, s, "min_ncc");
+  core::requireInRange(search_probability, 0.5, 0.99999, s, "search_probability");
+  core::requirePositive(max_search_half_extent_px, s, "max_search_half_extent_px");
+}
+
+void CMonoSlamSystem::TSearchOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
+{
+  MRPT_SAVE_CONFIG_VAR_COMMENT(patch_half_size, "template half size of both filters (5 -> 11x11 px)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(warp_patches, "predict patch appearance by an affine warp");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(min_ncc, "minimum zero-mean NCC of a match");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(search_probability, "probability of the search ellipse (2 dof)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(max_search_half_extent_px, "clip of very large search regions (px)");
+}
+
+void CMonoSlamSystem::TSearchOptions::applyTo(slam::CMonoSlamIMM::TOptions& so, shadow::CShadowFilter::TOptions& sh) const
+{
+  so.patch_half_size = sh.patch_half_size = patch_half_size;
+  so.warp_patches = sh.warp_patches = warp_patches;
+  so.min_ncc = sh.min_ncc = min_ncc;
+  so.search_probability = sh.search_probability = search_probability;
+  so.max_search_half_extent_px = sh.max_search_half_extent_px = max_search_half_extent_px;
+  sh.sigma_pixel = so.sigma_pixel;
+  sh.init_rho = so.init_rho;
+  sh.init_rho_std = so.init_rho_std;
+}
+
+const std::map<std::string, std::string>& CMonoSlamSystem::removedKeys()
+{
+  static const std::map<std::string, std::string> removed = [] {
+    std::map<std::string, std::string> m;
+    for (const char* k : {"patch_half_size", "warp_patches", "min_ncc", "search_probability", "max_search_half_extent_px"})
+    {
+      m[std::string("[slam] ") + k] = std::string("moved to [search] ") + k + " (one search for both filters)";
+      m[std::string("[shadow] ") + k] = std::string("moved to [search] ") + k + " (one search for both filters)";
+    }
+    for (const char* k : {"sigma_pixel", "init_rho", "init_rho_std"})
+      m[std::string("[shadow] ") + k] = std::string("removed: both filters use [slam] ") + k;
+    m["[imm] general_entry"] =
+        "removed: the default Markov matrix never switches a still or rotating mode into a general one "
+        "(the former 'evidence'; doc/imm.md); give any other matrix with [imm] transition_matrix";
+    m["[imm] lazy_prediction"] = "removed: dormant modes are always predicted lazily (it is exact)";
+    m["[shadow] static_power_worst_case"] =
+        "removed: the static power is the average over directions (the former 'false'; doc/shadow.md)";
+    m["[shadow] increment_cov_scale"] = "removed: the SLAM increments' covariance is used as it is";
+    m["[shadow] ekf_iterations"] = "removed: the shadow filter makes one EKF update per frame";
+    m["[shadow] id_offset"] = "removed: the system numbers the features of both filters";
+    m["[shadow] min_inverse_distance"] = "removed: a fixed clamp (1e-3) places tracks at infinity";
+    return m;
+  }();
+  return removed;
+}
+
 void CMonoSlamSystem::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
   IMMSLAM_LOAD_BOOL(shadow_filter);
@@ -73,10 +133,16 @@ void CMonoSlamSystem::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& 
 CMonoSlamSystem::CMonoSlamSystem(const mrpt::config::CConfigFileBase& cfg, camera::CCameraModel::Ptr cam)
 {
   m_opts.loadFromConfigFile(cfg, "system");
+  m_searchOpts.loadFromConfigFile(cfg, "search");
   m_slamOpts.loadFromConfigFile(cfg, "slam");
   m_bankOpts.loadFromConfigFile(cfg, "imm");
   m_ransacOpts.loadFromConfigFile(cfg, "ransac");
   m_shadowOpts.loadFromConfigFile(cfg, "shadow");
+  m_searchOpts.applyTo(m_slamOpts, m_shadowOpts);
+  // The power of a static decision is averaged over directions, not required in every one (the shadow
+  // filter's own default): a slow mover along its own viewing ray that gets promoted is caught by SLAM's
+  // outlier rejection when it moves across and handed back (handover_rejections; doc/shadow.md).
+  m_shadowOpts.static_power_worst_case = false;
   m_pendingWeight = TOptions::parsePendingWeight(m_opts.pending_weight, "system");
   m_slam = std::make_unique<slam::CMonoSlamIMM>(m_slamOpts, m_bankOpts, m_ransacOpts, cam);
   if (m_opts.shadow_filter)
@@ -407,16 +473,19 @@ double CMonoSlamSystem::pendingWeight() const
 void CMonoSlamSystem::effectiveConfig(const mrpt::config::CConfigFileBase& cfg, mrpt::config::CConfigFileBase& out)
 {
   TOptions o;
+  TSearchOptions se;
   slam::CMonoSlamIMM::TOptions so;
   slam::TIMMBankOptions bo;
   slam::COnePointRansac::TOptions ro;
   shadow::CShadowFilter::TOptions sh;
   o.loadFromConfigFile(cfg, "system");
+  se.loadFromConfigFile(cfg, "search");
   so.loadFromConfigFile(cfg, "slam");
   bo.loadFromConfigFile(cfg, "imm");
   ro.loadFromConfigFile(cfg, "ransac");
   sh.loadFromConfigFile(cfg, "shadow");
   o.saveToConfigFile(out, "system");
+  se.saveToConfigFile(out, "search");
   so.saveToConfigFile(out, "slam");
   bo.saveToConfigFile(out, "imm");
   ro.saveToConfigFile(out, "ransac");
@@ -426,6 +495,7 @@ void CMonoSlamSystem::effectiveConfig(const mrpt::config::CConfigFileBase& cfg, 
 std::map<std::string, std::set<std::string>> CMonoSlamSystem::knownKeys()
 {
   return {{"system", core::knownKeys(TOptions(), "system")},
+          {"search", core::knownKeys(TSearchOptions(), "search")},
           {"slam", core::knownKeys(slam::CMonoSlamIMM::TOptions(), "slam")},
           {"imm", core::knownKeys(slam::TIMMBankOptions(), "imm")},
           {"ransac", core::knownKeys(slam::COnePointRansac::TOptions(), "ransac")},

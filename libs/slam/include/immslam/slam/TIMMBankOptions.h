@@ -18,20 +18,17 @@ struct TIMMBankOptions : public mrpt::config::CLoadableOptions
 {
   /** Space-separated model specs: `stationary`, `rotation:SIGMA_ANG_PX`,
    * `general:SIGMA_PX` or `general:SIGMA_LIN_PX:SIGMA_ANG_PX`. */
-  std::string models = "stationary:0.1 rotation:0.1 rotation:0.5 rotation:1 general:0.1 general:0.5 general:1";
+  std::string models = "stationary rotation:0.1 rotation:0.5 rotation:1 general:0.1 general:0.5 general:1";
   /** r x r row-major Markov matrix pi(j, i) = P(i at k | j at k-1); empty: built from transition_stay. */
   std::vector<double> transition_matrix;
-  /** Diagonal of the default Markov matrix; the rest of each row is spread evenly. */
+  /** Diagonal of the default Markov matrix. The rest of a general mode's row is spread evenly over the
+   * other modes; a mode whose linear velocity is fixed at 0 (stationary, rotation) spreads
+   * (1 - transition_stay) / (r - 1) over the non-general modes only and keeps the remainder on the
+   * diagonal: no Markov switch into a general mode, which then keeps its own history (mixing from a
+   * mode with v = 0 and zero variance would pull its velocity, which carries the scale of a monocular
+   * map, back to 0 every frame) and takes over by the likelihood of the measurements from the
+   * probability floor (doc/imm.md, "Entering the general modes"). */
   double transition_stay = 0.995;
-  /** How the default Markov matrix lets a general mode be entered (ignored with transition_matrix):
-   * "markov": from every mode (the rest of each row spread evenly over all the other modes);
-   * "evidence": not from a mode whose linear velocity is fixed at 0 (stationary, rotation): those rows
-   * spread (1 - transition_stay) / (r - 1) over the non-general modes only and keep the remainder on
-   * the diagonal. The general modes then keep their own history (mixing from a mode with v = 0 and
-   * zero variance would pull their velocity, which carries the scale of a monocular map, back to 0
-   * every frame) and take over by the likelihood of the measurements from the probability floor
-   * (doc/imm.md, "Entering the general modes"). */
-  std::string general_entry = "markov";
   /** Initial model probabilities (empty: uniform). */
   std::vector<double> prior;
   /** Lower bound of every model probability (no model dies for ever). */
@@ -52,13 +49,14 @@ struct TIMMBankOptions : public mrpt::config::CLoadableOptions
    * its predicted mean and the blocks of its transition only; the blocks of its predicted covariance
    * that the frame reads (search regions, RANSAC columns, its likelihood) are computed from them in
    * O(n) each, and the O(n^2) covariance prediction runs only if the frame makes it active. Exact: the
-   * same numbers as the full prediction, up to rounding. */
+   * same numbers as the full prediction, up to rounding. Not a configuration key (it is exact): the
+   * field lets the tests compare it with the full prediction. */
   bool lazy_prediction = true;
   /** Zero-mean angular shake of the camera, px per frame (std of a random walk of the orientation,
    * shake_px / f sqrt(dt) rad), in every model: after the stationary model's identity, the rotation
    * and general models' constant-velocity step (motion::TMotionModel::shakePx; doc/imm.md, "Camera
    * shake"). 0 = none (the paper's models). */
-  double shake_px = 0.0;
+  double shake_px = 0.15;
 
   void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
   void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;

@@ -48,7 +48,7 @@ class CMonoSlamSystem
   struct TOptions : public mrpt::config::CLoadableOptions
   {
     /** New features go first to the MonoSLAMBOT shadow filter (true) or straight into SLAM (false). */
-    bool shadow_filter = false;
+    bool shadow_filter = true;
     /** A SLAM feature found but rejected as an outlier in this many consecutive frames is removed from
      * SLAM and re-initialised in the shadow filter (it may have started to move). 0: never. */
     int handover_rejections = 3;
@@ -79,7 +79,25 @@ class CMonoSlamSystem
     void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
   };
 
-  /** Loads [system], [slam], [imm], [ransac] and [shadow] from cfg.
+  /** The active search, shared by both filters (section [search]): one camera, one matcher. The SLAM
+   * filter and the shadow filter search their predicted ellipses (Civera et al. eqs. 10-14) with the
+   * same template size, warp, correlation threshold and ellipse probability. The image noise is
+   * [slam] sigma_pixel for both (the shadow filter takes its initial value), and so is the
+   * inverse-depth prior ([slam] init_rho, init_rho_std). */
+  struct TSearchOptions : public mrpt::config::CLoadableOptions
+  {
+    int patch_half_size = 5;                ///< template half size (5 -> 11x11 px)
+    bool warp_patches = true;               ///< predict the patch appearance by an affine warp
+    double min_ncc = 0.8;                   ///< minimum zero-mean NCC of a match
+    double search_probability = 0.95;       ///< probability of the search ellipse (2 dof)
+    double max_search_half_extent_px = 60;  ///< clip of very large search regions (px)
+    void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
+    void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
+    /** Copies the search block, the image noise and the depth prior into both filters' options. */
+    void applyTo(slam::CMonoSlamIMM::TOptions& slamOpts, shadow::CShadowFilter::TOptions& shadowOpts) const;
+  };
+
+  /** Loads [system], [search], [slam], [imm], [ransac] and [shadow] from cfg.
    * \throws std::runtime_error naming the section/key of a bad value. */
   CMonoSlamSystem(const mrpt::config::CConfigFileBase& cfg, camera::CCameraModel::Ptr cam);
   ~CMonoSlamSystem();
@@ -125,6 +143,9 @@ class CMonoSlamSystem
   static void effectiveConfig(const mrpt::config::CConfigFileBase& cfg, mrpt::config::CConfigFileBase& out);
   /** Keys known per section (for the unknown-key check of the application). */
   static std::map<std::string, std::set<std::string>> knownKeys();
+  /** Keys that older configs may hold and that were removed or moved: "[section] key" -> what replaced
+   * it (the application's key check names both). */
+  static const std::map<std::string, std::string>& removedKeys();
 
  private:
   shadow::TCameraMotion cameraMotion(double timestamp, double dt) const;
@@ -144,6 +165,7 @@ class CMonoSlamSystem
   void retireWatched(std::vector<shadow::TPromotion>& promotions);
 
   TOptions m_opts;
+  TSearchOptions m_searchOpts;
   slam::CMonoSlamIMM::TOptions m_slamOpts;
   slam::TIMMBankOptions m_bankOpts;
   slam::COnePointRansac::TOptions m_ransacOpts;
