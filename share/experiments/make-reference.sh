@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# A reference trajectory for a real sequence that has no usable ground truth: a COLMAP reconstruction of
+# its images (Debian's colmap: SIFT features, sequential matching, incremental mapping and bundle
+# adjustment), written as TUM (T_world_camera, the sequence's timestamps) for slam-eval.
+#   share/experiments/make-reference.sh DATASET_FOLDER OUT_FOLDER [CAMERA_MODEL] [CAMERA_PARAMS]
+# DATASET_FOLDER: rgb.txt + images (../shared/data/README.md). CAMERA_MODEL/PARAMS: COLMAP's (default
+# from calib.txt: pinhole -> PINHOLE fx,fy,cx,cy held fixed; davison -> RADIAL f,cx,cy,k1,k2 refined,
+# started from k1 = -kd1 f^2, the first-order match of Davison's model). Writes OUT/reference.txt,
+# OUT/reference_stats.txt (registered images, points, mean reprojection error) and keeps COLMAP's
+# database and model in OUT. Needs: apt-get install colmap. Nothing is written into the repository.
+set -euo pipefail
+DATA=$(cd "$1" && pwd); OUT=$2; mkdir -p "$OUT"; OUT=$(cd "$OUT" && pwd)
+read -r MODEL W H FX FY CX CY K1 < <(grep -v '^#' "$DATA/calib.txt" | head -1) || true
+CAM_MODEL=${3:-}; CAM_PARAMS=${4:-}; REFINE=0
+if [[ -z "$CAM_MODEL" ]]; then
+  case "$MODEL" in
+    pinhole) CAM_MODEL=PINHOLE; CAM_PARAMS="$FX,$FY,$CX,$CY" ;;
+    davison) CAM_MODEL=RADIAL; CAM_PARAMS="$FX,$CX,$CY,$(python3 -c "print(-$K1*$FX*$FX)"),0"; REFINE=1 ;;
+    *) echo "make-reference: calib model '$MODEL' needs CAMERA_MODEL and CAMERA_PARAMS" >&2; exit 2 ;;
+  esac
+fi
+# Images listed in rgb.txt, in order (COLMAP reads a folder: link them under their own names).
+mkdir -p "$OUT/images"
+grep -v '^#' "$DATA/rgb.txt" | while read -r ts f; do ln -sf "$DATA/$f" "$OUT/images/$(basename "$f")"; done
+THREADS=${THREADS:-2}
+rm -f "$OUT/database.db"
+colmap feature_extractor --database_path "$OUT/database.db" --image_path "$OUT/images" \
+  --ImageReader.single_camera 1 --ImageReader.camera_model "$CAM_MODEL" --ImageReader.camera_params "$CAM_PARAMS" \
+  --SiftExtraction.use_gpu 0 --SiftExtraction.num_threads "$THREADS" --SiftExtraction.max_num_features 4096 > "$OUT/colmap.log" 2>&1
+colmap sequential_matcher --database_path "$OUT/database.db" --SiftMatching.use_gpu 0 \
+  --SiftMatching.num_threads "$THREADS" --SequentialMatching.overlap "${OVERLAP:-15}" --SequentialMatching.loop_detection 0 >> "$OUT/colmap.log" 2>&1
+mkdir -p "$OUT/sparse"
+colmap mapper --database_path "$OUT/database.db" --image_path "$OUT/images" --output_path "$OUT/sparse" \
+  --Mapper.num_threads "$THREADS" --Mapper.ba_refine_focal_length "$REFINE" --Mapper.ba_refine_extra_params "$REFINE" \
+  --Mapper.ba_refine_principal_point 0 --Mapper.multiple_models 0 >> "$OUT/colmap.log" 2>&1
+# The largest model (mapper numbers them 0, 1, ...; with multiple_models 0 there is one).
+MODEL_DIR="$OUT/sparse/0"
+colmap model_converter --input_path "$MODEL_DIR" --output_path "$MODEL_DIR" --output_type TXT >> "$OUT/colmap.log" 2>&1
+python3 - "$DATA/rgb.txt" "$MODEL_DIR" "$OUT" <<'PY'
+import sys, math
+rgb, model, out = sys.argv[1:4]
+stamp = {}
+for line in open(rgb):
+    if line.startswith('#') or not line.strip(): continue
+    ts, f = line.split()[:2]
+    stamp[f.split('/')[-1]] = ts
+poses = []
+lines = [l for l in open(model + '/images.txt') if not l.startswith('#')]
+for i in range(0, len(lines), 2):
+    p = lines[i].split()
+    if len(p) < 10: continue
+    qw, qx, qy, qz, tx, ty, tz = map(float, p[1:8])
+    name = p[9]
+    # COLMAP stores camera-from-world (R_CW, t_CW); TUM wants world-from-camera: R_WC = R_CW^T, t = -R_CW^T t_CW.
+    R = [[1-2*(qy*qy+qz*qz), 2*(qx*qy-qz*qw), 2*(qx*qz+qy*qw)],
+         [2*(qx*qy+qz*qw), 1-2*(qx*qx+qz*qz), 2*(qy*qz-qx*qw)],
+         [2*(qx*qz-qy*qw), 2*(qy*qz+qx*qw), 1-2*(qx*qx+qy*qy)]]
+    c = [-(R[0][k]*tx + R[1][k]*ty + R[2][k]*tz) for k in range(3)]
+    poses.append((float(stamp[name]), c, (-qx, -qy, -qz, qw)))  # conjugate quaternion = R^T
+poses.sort()
+with open(out + '/reference.txt', 'w') as f:
+    f.write('# timestamp tx ty tz qx qy qz qw (COLMAP reconstruction, T_world_camera)\n')
+    for ts, c, q in poses:
+        f.write('%.6f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n' % (ts, c[0], c[1], c[2], q[0], q[1], q[2], q[3]))
+npts = sum(1 for l in open(model + '/points3D.txt') if not l.startswith('#'))
+errs = [float(l.split()[7]) for l in open(model + '/points3D.txt') if not l.startswith('#')]
+cams = [l.strip() for l in open(model + '/cameras.txt') if not l.startswith('#')]
+total = len(stamp)
+with open(out + '/reference_stats.txt', 'w') as f:
+    f.write('registered %d of %d images; %d points; mean reprojection error %.3f px; camera %s\n'
+            % (len(poses), total, npts, sum(errs) / max(1, len(errs)), cams[0] if cams else '?'))
+print(open(out + '/reference_stats.txt').read().strip())
+PY
