@@ -4,7 +4,7 @@
 #include <immslam/core/TTrajectory.h>
 #include <immslam/camera/CCameraModel.h>
 #include <immslam/eval/ate.h>
-#include <immslam/eval/reprojection.h>
+#include <immslam/refine/bundle_adjust.h>
 #include <immslam/eval/rpe.h>
 #include <immslam/eval/search_nis.h>
 #include <immslam/eval/statistics.h>
@@ -107,7 +107,7 @@ TEST(SystemRealData, MonoslamTestseqTrackedEndToEndWithoutKnownTarget)
   int minMatched = 1 << 30;
   for (std::size_t i = 2; i < rows.size(); ++i) minMatched = std::min(minMatched, std::stoi(rows[i][3]));
   const auto cam = camera::loadCalibFile(sharedData("monoslam_testseq") + "/calib.txt");
-  const auto st = eval::reprojectionStats(eval::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"),
+  const auto st = refine::reprojectionStats(refine::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"),
                                                                   core::readTumTrajectory(out + "/trajectory.txt"),
                                                                   *cam, 1e-4, 8));
   std::printf("testseq single: median matched %.0f, min matched %d, final map %d; the estimate's poses leave %zu of %zu "
@@ -125,15 +125,15 @@ TEST(SystemRealData, MonoslamTestseqTrackedEndToEndWithoutKnownTarget)
 namespace
 {
 /** A bundle adjustment of a run's own measurements (searches.csv) started from `start`. */
-eval::TBundleProblem refinedFrom(const std::string& out, const core::TTrajectory& start, const std::string& calib,
-                                 eval::TReprojectionStats* before = nullptr)
+refine::TBundleProblem refinedFrom(const std::string& out, const core::TTrajectory& start, const std::string& calib,
+                                 refine::TReprojectionStats* before = nullptr)
 {
   const auto cam = camera::loadCalibFile(calib);
-  eval::TBundleProblem p = eval::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"), start, *cam, 1e-4, 8);
-  if (before) *before = eval::reprojectionStats(p);
-  const auto r = eval::bundleAdjust(p);
+  refine::TBundleProblem p = refine::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"), start, *cam, 1e-4, 8);
+  if (before) *before = refine::reprojectionStats(p);
+  const auto r = refine::bundleAdjust(p);
   EXPECT_TRUE(r.converged);
-  EXPECT_LT(eval::reprojectionStats(p).rmsPx, 1.0);
+  EXPECT_LT(refine::reprojectionStats(p).rmsPx, 1.0);
   return p;
 }
 
@@ -141,7 +141,7 @@ eval::TBundleProblem refinedFrom(const std::string& out, const core::TTrajectory
 struct TRefinedRun
 {
   core::TTrajectory est;
-  eval::TBundleProblem ba;
+  refine::TBundleProblem ba;
 };
 TRefinedRun runAndRefine(const std::string& config, const std::string& data, const std::string& name)
 {
@@ -173,7 +173,7 @@ TEST(SystemRealData, VispRbtGroundTruthDisagreesWithTheImagesAndTheEstimateAgree
   const auto gt = core::readTumTrajectory(sharedData("visp_rbt") + "/groundtruth.txt");
   const auto est = core::readTumTrajectory(out + "/trajectory.txt");
   const std::string calib = sharedData("visp_rbt") + "/calib.txt";
-  eval::TReprojectionStats gtStats, estStats;
+  refine::TReprojectionStats gtStats, estStats;
   const auto fromGt = refinedFrom(out, gt, calib, &gtStats);
   const auto fromEst = refinedFrom(out, est, calib, &estStats);
   const double baVsBa = eval::computeAte(fromEst.poses, fromGt.poses).rmseOverPath;
@@ -208,8 +208,8 @@ TEST(SystemRealData, ExactGroundTruthAndLongRealRunAgreeWithTheirMeasurements)
                       "output.plots=false", "--set", "output.search_log=true"}),
               0);
     const auto cam = camera::loadCalibFile(sharedData("monoslammot_synth19") + "/calib.txt");
-    const auto st = eval::reprojectionStats(
-        eval::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"),
+    const auto st = refine::reprojectionStats(
+        refine::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"),
                                 core::readTumTrajectory(sharedData("monoslammot_synth19") + "/groundtruth.txt"), *cam,
                                 1e-4, 8));
     std::printf("synth19: ground truth leaves %zu of %zu features above 2 px, RMS %.2f px\n", st.featuresAbove,

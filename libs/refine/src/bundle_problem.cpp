@@ -1,8 +1,8 @@
-/* imm-monoslam — reprojection error of a trajectory against the measurements of searches.csv,
- * and a bundle adjustment of them (Triggs et al., "Bundle Adjustment — A Modern Synthesis", 2000:
- * Levenberg-Marquardt on the sparse normal equations, Huber weights by IRLS). */
+/* imm-monoslam — the bundle problem (see bundle_problem.h): measurements joined to poses, points
+ * triangulated, reprojection error of a trajectory against the measurements of searches.csv. */
 #include <immslam/camera/CCameraModel.h>
-#include <immslam/eval/reprojection.h>
+#include <immslam/refine/bundle_adjust.h>
+#include <immslam/refine/bundle_problem.h>
 #include <immslam/eval/statistics.h>
 #include <immslam/math/quaternion.h>
 
@@ -15,7 +15,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace immslam::eval
+namespace immslam::refine
 {
 namespace
 {
@@ -194,7 +194,7 @@ bool reprojectionResidual(const Mat3& R_CW, const Vec3& t_CW, const Vec3& X_W, c
   return true;
 }
 
-TBundleProblem makeBundleProblem(const std::vector<TSearchRow>& rows, const core::TTrajectory& poses,
+TBundleProblem makeBundleProblem(const std::vector<eval::TSearchRow>& rows, const core::TTrajectory& poses,
                                  const camera::CCameraModel& cam, double maxDt, int minViews, int minPerPose)
 {
   if (minViews < 2) throw std::invalid_argument("makeBundleProblem: minViews must be >= 2");
@@ -302,8 +302,8 @@ TReprojectionStats reprojectionStats(const TBundleProblem& p, double thresholdPx
   }
   if (!s.featureRmsPx.empty())
   {
-    s.medianFeatureRmsPx = percentile(s.featureRmsPx, 50);
-    s.p90FeatureRmsPx = percentile(s.featureRmsPx, 90);
+    s.medianFeatureRmsPx = eval::percentile(s.featureRmsPx, 50);
+    s.p90FeatureRmsPx = eval::percentile(s.featureRmsPx, 90);
   }
   return s;
 }
@@ -314,7 +314,7 @@ TReprojectionStats triangulateAll(TBundleProblem& p, double thresholdPx)
   return reprojectionStats(p, thresholdPx);
 }
 
-std::vector<std::size_t> firstPoseOfEachComponent(const TBundleProblem& p, const std::vector<char>& used)
+std::vector<std::size_t> componentOfEachPose(const TBundleProblem& p, const std::vector<char>& used)
 {
   // Union-find over the poses: the used measurements of one point join their poses.
   std::vector<std::size_t> parent(p.poses.size());
@@ -337,13 +337,21 @@ std::vector<std::size_t> firstPoseOfEachComponent(const TBundleProblem& p, const
       if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the root is the component's first pose
     }
   }
+  std::vector<std::size_t> comp(p.poses.size());
+  for (std::size_t i = 0; i < p.poses.size(); ++i) comp[i] = find(i);
+  return comp;
+}
+
+std::vector<std::size_t> firstPoseOfEachComponent(const TBundleProblem& p, const std::vector<char>& used)
+{
+  const std::vector<std::size_t> comp = componentOfEachPose(p, used);
   std::vector<std::size_t> roots;
-  for (std::size_t i = 0; i < p.poses.size(); ++i)
-    if (find(i) == i) roots.push_back(i);
+  for (std::size_t i = 0; i < comp.size(); ++i)
+    if (comp[i] == i) roots.push_back(i);
   return roots;
 }
 
-TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
+TBundleResult detail::legacyBundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
 {
   const int nP = static_cast<int>(p.poses.size()), nX = static_cast<int>(p.points.size());
   const int n = 6 * nP + 3 * nX;
@@ -466,4 +474,4 @@ std::string TReprojectionStats::summary() const
      << featuresAbove << " features above " << thresholdPx << " px\n";
   return os.str();
 }
-}  // namespace immslam::eval
+}  // namespace immslam::refine
