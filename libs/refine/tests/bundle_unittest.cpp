@@ -1,7 +1,7 @@
 /* Tests: reprojection error of a trajectory against searches.csv measurements, and the bundle
  * adjustment: residual Jacobians against numerical ones, a true trajectory leaves only the
  * matching noise (pinhole and distorted cameras), a bent one shows, the refinement recovers the
- * true trajectory from the bent one, the same minimum as the former hand-written solver, and the
+ * true trajectory from the bent one, the minimum the former hand-written solver reached, and the
  * errors of bad input. */
 #include <gtest/gtest.h>
 #include <immslam/camera/CCameraModel.h>
@@ -196,18 +196,15 @@ TEST(Reprojection, MeasurementsOfAPointBehindTheCameraAreLeftOut)
 
 TEST(Reprojection, CeresReachesTheCostOfTheFormerSolver)
 {
-  // The same bent start, refined by the Ceres adjuster and by the former hand-written
-  // Levenberg-Marquardt: the same robust cost per measurement at the end, and the same trajectory.
+  // The bent start below, refined by the former hand-written Levenberg-Marquardt (sparse normal
+  // equations, IRLS Huber weights; replaced by Ceres) ended at a robust cost of 0.451528991 px^2 per
+  // measurement in 6 iterations, and Ceres then reached the same to 9 digits (recorded with both
+  // in the tree). The Ceres adjuster must keep reaching that minimum.
   const TScene s = makeScene();
   const auto cam = pinhole();
-  const auto rows = measure(s, *cam, 0.5);
-  TBundleProblem a = makeBundleProblem(rows, bend(s.poses, 3.0), *cam, 1e-4, 8);
-  TBundleProblem b = a;
+  TBundleProblem a = makeBundleProblem(measure(s, *cam, 0.5), bend(s.poses, 3.0), *cam, 1e-4, 8);
   const TBundleResult ra = bundleAdjust(a);
-  const TBundleResult rb = detail::legacyBundleAdjust(b);
-  std::printf("cost per measurement: start %.9f, Ceres %.9f (%d iterations), former %.9f (%d iterations)\n",
-              ra.initialCost, ra.finalCost, ra.iterations, rb.finalCost, rb.iterations);
-  EXPECT_NEAR(ra.initialCost, rb.initialCost, 1e-9 * rb.initialCost);
-  EXPECT_NEAR(ra.finalCost, rb.finalCost, 1e-6 * rb.finalCost);
-  EXPECT_LT(rmsAfterSim3(a.poses, b.poses), 1e-5);
+  EXPECT_NEAR(ra.initialCost, 42.122039941, 1e-8);
+  EXPECT_NEAR(ra.finalCost, 0.451528991, 1e-8);
+  EXPECT_TRUE(ra.converged);
 }

@@ -45,10 +45,4 @@ struct TBundleResult
  * deterministic. */
 TBundleResult bundleAdjust(TBundleProblem& problem, const TBundleOptions& opts = {});
 
-namespace detail
-{
-/** The former hand-written Levenberg-Marquardt (sparse normal equations, IRLS Huber weights); kept
- * only to check that bundleAdjust() reaches the same cost. */
-TBundleResult legacyBundleAdjust(TBundleProblem& problem, const TBundleOptions& opts = {});
-}  // namespace detail
 }  // namespace immslam::refine
