@@ -1,13 +1,15 @@
 /* imm-monoslam — the online keyframe smoother (see CKeyframeSmoother.h). */
+#include <immslam/eval/statistics.h>
 #include <immslam/math/quaternion.h>
 #include <immslam/refine/CKeyframeSmoother.h>
 
 #include <algorithm>
+#include <cmath>
 #include <ctime>
 #include <limits>
 #include <map>
 #include <stdexcept>
-#include <unordered_set>
+#include <unordered_map>
 
 namespace immslam::refine
 {
@@ -142,6 +144,24 @@ void CKeyframeSmoother::finish()
   if (m_thread.joinable()) m_thread.join();
 }
 
+std::vector<double> CKeyframeSmoother::parallaxPx(const TKeyframe& kf, const TSmootherFrame& frame) const
+{
+  // Chain rule of the bearings: b_C = R_C_W R_W_K b_K for a point at infinity (no parallax).
+  const Mat3 R_C_K = math::quatToRotation(frame.pose.q_W_C).transpose() * math::quatToRotation(kf.pub.filterPose.q_W_C);
+  std::unordered_map<std::int64_t, Vec2> atKeyframe;
+  for (const auto& m : kf.matches) atKeyframe.emplace(m.featureId, m.xn);
+  std::vector<double> out;
+  for (const auto& m : frame.matches)
+  {
+    const auto it = atKeyframe.find(m.featureId);
+    if (it == atKeyframe.end()) continue;
+    const Vec3 b = R_C_K * Vec3(it->second.x(), it->second.y(), 1);
+    if (!(b.z() > 0)) continue;
+    out.push_back(std::hypot(m_fx * (m.xn.x() - b.x() / b.z()), m_fy * (m.xn.y() - b.y() / b.z())));
+  }
+  return out;
+}
+
 bool CKeyframeSmoother::ingest(TSmootherFrame&& frame)
 {
   // Only this thread (the worker, or the synchronous caller) changes the frames and keyframes; it
@@ -155,12 +175,11 @@ bool CKeyframeSmoother::ingest(TSmootherFrame&& frame)
     else
     {
       const TKeyframe& last = m_keyframes.back();
-      std::unordered_set<std::int64_t> seen;
-      for (const auto& m : last.matches) seen.insert(m.featureId);
-      const auto shared = std::count_if(frame.matches.begin(), frame.matches.end(),
-                                        [&](const TSmootherMatch& m) { return seen.count(m.featureId) > 0; });
-      isKeyframe = static_cast<double>(shared) < m_opts.minOverlap * static_cast<double>(frame.matches.size()) ||
-                   index - last.pub.frame >= m_opts.maxFrameGap;
+      const std::vector<double> parallax = parallaxPx(last, frame);
+      const std::size_t shared = parallax.size();
+      const bool due = static_cast<double>(shared) < m_opts.minOverlap * static_cast<double>(frame.matches.size()) ||
+                       index - last.pub.frame >= m_opts.maxFrameGap;
+      isKeyframe = due && (shared < m_opts.minMatches || eval::median(parallax) >= m_opts.minParallaxPx);
     }
   }
   std::lock_guard<std::mutex> lk(m_mutex);

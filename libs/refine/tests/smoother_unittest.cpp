@@ -155,3 +155,24 @@ TEST(KeyframeSmoother, PublishesKeyframesWhileRunningAndRefusesFramesAfterFinish
   bad.windowKeyframes = 2;
   EXPECT_THROW(CKeyframeSmoother(bad, kF, kF), std::invalid_argument);
 }
+
+TEST(KeyframeSmoother, ACameraAtRestOrPanningAddsNoKeyframe)
+{
+  // 40 frames from the first pose of the scene, then 40 turning about the camera centre: the
+  // features move by the rotation only (no parallax), so only the first frame is a keyframe (more
+  // would be positions the images cannot fix); the output is the filter's poses.
+  test::TScene s = test::makeScene(80, 60);
+  for (std::size_t i = 0; i < s.poses.size(); ++i)
+  {
+    s.poses[i].p_W_C = s.poses[0].p_W_C;
+    const double a = i < 40 ? 0.0 : 0.004 * static_cast<double>(i - 40);
+    s.poses[i].q_W_C = math::quatMultiply(s.poses[0].q_W_C, math::quatFromRotationVector(Vec3(0, a, 0)));
+  }
+  std::vector<TSmootherFrame> frames = filterFrames(s);
+  for (std::size_t i = 0; i < frames.size(); ++i) frames[i].pose = s.poses[i];
+  TSmootherStats st;
+  const core::TTrajectory out = smooth(frames, true, &st);
+  EXPECT_EQ(st.keyframes, 1u);
+  EXPECT_EQ(st.optimisations, 0u);
+  for (std::size_t i = 0; i < out.size(); ++i) EXPECT_LT((out[i].p_W_C - s.poses[i].p_W_C).norm(), 1e-12) << i;
+}

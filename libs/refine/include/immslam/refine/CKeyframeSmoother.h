@@ -56,8 +56,10 @@ struct TSmootherStats
  *
  * Keyframes: the first frame with at least TOptions::minMatches matches, then a frame when fewer
  * than TOptions::minOverlap of its matches were measured at the last keyframe (the view has
- * changed), or TOptions::maxFrameGap frames after it. A new keyframe starts at the last keyframe's
- * smoothed pose composed with the filter's relative motion between the two.
+ * changed), or TOptions::maxFrameGap frames after it, provided the features it shares with the last
+ * keyframe moved by TOptions::minParallaxPx once the filter's rotation is taken out (or it shares
+ * fewer than minMatches: the view is new). A new keyframe starts at the last keyframe's smoothed pose
+ * composed with the filter's relative motion between the two.
  *
  * Window: the last TOptions::windowKeyframes keyframes; every feature measured by at least
  * TOptions::minViews of them is triangulated from the current poses (triangulateAll()), then poses
@@ -77,10 +79,14 @@ class CKeyframeSmoother
   struct TOptions
   {
     std::size_t windowKeyframes = 20;  ///< keyframes optimised together
-    std::size_t heldKeyframes = 10;    ///< oldest keyframes of the window held fixed (gauge and scale)
+    std::size_t heldKeyframes = 5;     ///< oldest keyframes of the window held fixed (gauge and scale)
     double minOverlap = 0.7;           ///< a new keyframe when less of a frame's matches were at the last one
     std::size_t maxFrameGap = 3;       ///< a new keyframe at most this many frames after the last one
     std::size_t minMatches = 8;        ///< a frame with fewer matches is never a keyframe
+    /** A frame sharing features with the last keyframe becomes one only if their median parallax
+     * (bearing change once the filter's rotation is taken out, pixels) reaches this: a camera at rest
+     * or panning adds no keyframe whose position the images could not fix. */
+    double minParallaxPx = 1;
     int minViews = 3;                  ///< keyframes that must measure a feature for it to enter the window
     double huberPx = 2;                ///< Huber threshold of the cost (pixels)
     int maxIterations = 15;            ///< Levenberg-Marquardt iterations per window optimisation
@@ -126,6 +132,9 @@ class CKeyframeSmoother
   void run();
   /** Picks keyframes among `frame`; \return true if it became one. Worker or synchronous caller. */
   bool ingest(TSmootherFrame&& frame);
+  /** Per feature `frame` shares with `kf`: its bearing change once the filter's rotation between
+   * the two is taken out (pixels). */
+  std::vector<double> parallaxPx(const TKeyframe& kf, const TSmootherFrame& frame) const;
   /** Bundle-adjusts the window and publishes its poses. */
   void optimiseWindow();
 
