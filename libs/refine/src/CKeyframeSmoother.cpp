@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <ctime>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -98,6 +101,8 @@ void CKeyframeSmoother::addFrame(TSmootherFrame frame)
 
 void CKeyframeSmoother::run()
 {
+  // The worker yields the CPU to the filter's thread when they compete (Linux: a per-thread nice).
+  if (m_opts.workerNice > 0) setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), m_opts.workerNice);
   const double c0 = threadCpuSeconds();
   bool pending = false;  // a keyframe arrived whose optimisation was skipped
   for (;;)

@@ -94,6 +94,7 @@ class CKeyframeSmoother
      * queue (a later keyframe's optimisation covers it): the lag stays bounded on a slow machine.
      * While it keeps up, the result is that of a synchronous run. */
     std::size_t maxBacklogFrames = 30;
+    int workerNice = 10;               ///< nice value of the worker thread (0: the caller's priority)
     bool synchronous = false;          ///< no thread: addFrame() optimises before it returns
   };
 
