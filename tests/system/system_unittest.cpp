@@ -272,6 +272,39 @@ TEST(SystemOutputs, RefinedTrajectoryOnlyWhenAsked)
   EXPECT_EQ(readFile(plain + "/trajectory.txt"), readFile(refined + "/trajectory.txt"));
 }
 
+TEST(SystemOutputs, SmoothedTrajectoryOnlyWhenAskedAndTheFilterUnchanged)
+{
+  // [output] smooth_trajectory: trajectory_smoothed.txt, one pose per processed frame, from the
+  // keyframe smoother's thread; its ATE, lag and CPU time in the summary; the filter's own outputs
+  // byte-identical to a run without it; not written unless asked.
+  const std::vector<std::string> base{sourceDir() + "/ini/imm7-shadow.ini", "--frames", "120", "--set",
+                                      "input.scenario=scenarios/handheld.ini", "--set", "output.plots=false"};
+  auto args = base;
+  const auto plain = outDir("smooth_off");
+  args.insert(args.end(), {"--out", plain});
+  ASSERT_EQ(runApp(args), 0);
+  EXPECT_FALSE(std::filesystem::exists(plain + "/trajectory_smoothed.txt"));
+
+  args = base;
+  const auto smoothed = outDir("smooth_on");
+  args.insert(args.end(), {"--out", smoothed, "--set", "output.smooth_trajectory=true"});
+  app::TRunSummary s;
+  ASSERT_EQ(runApp(args, &s), 0);
+  const auto traj = core::readTumTrajectory(smoothed + "/trajectory_smoothed.txt");
+  const auto filter = core::readTumTrajectory(smoothed + "/trajectory.txt");
+  ASSERT_EQ(traj.size(), filter.size());
+  for (std::size_t i = 0; i < traj.size(); ++i) EXPECT_EQ(traj[i].timestamp, filter[i].timestamp);
+  ASSERT_TRUE(s.ate && s.ateSmoothed);
+  std::printf("handheld 120 frames: filter %.3f %%, smoothed %.3f %% of path; lag median %.0f, max %.0f frames; "
+              "smoother CPU %.2f s\n",
+              100 * s.ate->rmseOverPath, 100 * s.ateSmoothed->rmseOverPath, s.smoothMedianLagFrames,
+              s.smoothMaxLagFrames, s.smoothCpuSeconds);
+  // Not an accuracy claim (doc/experiments/smoother.md): only that it stays near the filter.
+  EXPECT_LT(s.ateSmoothed->rmseOverPath, 2 * s.ate->rmseOverPath);
+  EXPECT_EQ(readFile(plain + "/trajectory.txt"), readFile(smoothed + "/trajectory.txt"));
+  EXPECT_EQ(readFile(plain + "/model_probabilities.csv"), readFile(smoothed + "/model_probabilities.csv"));
+}
+
 TEST(SystemOutputs, ContractFilesAndDeterminism)
 {
   // Two runs of the same input and config: the estimates are byte-identical (timings aside).
