@@ -1,6 +1,6 @@
 /* slam-eval: evaluation of imm-monoslam's outputs against ground truth (ATE/RPE, motion
  * segmentation, static/dynamic classification, track errors, NIS); see --help. */
-#include <immslam/eval/slam_eval_app.h>
+#include <immslam/evalapp/slam_eval_app.h>
 #include <immslam/sim/pixel_truth.h>
 
 #include <iostream>
@@ -8,8 +8,8 @@
 
 int main(int argc, char** argv)
 {
-  namespace eval = immslam::eval;
-  eval::TSlamEvalTruthSources truth;
+  namespace evalapp = immslam::evalapp;
+  evalapp::TSlamEvalTruthSources truth;
   // Tracks on a rendered sequence: the truth at each tracked pixel is ray cast through the
   // renderer's world (eval does not depend on the renderer, so it is plugged in here).
   truth.renderedTrackTruth = [](const std::string& folder, const std::vector<immslam::core::TTrackSample>& samples,
@@ -22,5 +22,5 @@ int main(int argc, char** argv)
     report = s.str();
     return points;
   };
-  return eval::runSlamEvalApp(std::vector<std::string>(argv, argv + argc), std::cout, std::cerr, truth);
+  return evalapp::runSlamEvalApp(std::vector<std::string>(argv, argv + argc), std::cout, std::cerr, truth);
 }

@@ -5,6 +5,7 @@ PKGS=(
   build-essential cmake pkg-config ccache
   libmrpt-dev mrpt-apps          # MRPT 2.5 (libraries, SceneViewer3D, RawLogViewer)
   libopencv-dev libeigen3-dev zlib1g-dev
+  libceres-dev                   # Ceres Solver 2.1: libs/refine (bundle adjustment, keyframe smoother)
   libgtest-dev libgmock-dev libbenchmark-dev
   libegl1 libegl-mesa0 libgl1-mesa-dri   # offscreen scene snapshots (EGL, no X needed)
   clang libclang-rt-14-dev llvm-14       # fuzz.sh: libFuzzer + sanitizer runtimes, llvm-symbolizer

@@ -4,7 +4,7 @@
 #include <immslam/core/TTrajectory.h>
 #include <immslam/camera/CCameraModel.h>
 #include <immslam/eval/ate.h>
-#include <immslam/eval/reprojection.h>
+#include <immslam/refine/bundle_adjust.h>
 #include <immslam/eval/rpe.h>
 #include <immslam/eval/search_nis.h>
 #include <immslam/eval/statistics.h>
@@ -107,7 +107,7 @@ TEST(SystemRealData, MonoslamTestseqTrackedEndToEndWithoutKnownTarget)
   int minMatched = 1 << 30;
   for (std::size_t i = 2; i < rows.size(); ++i) minMatched = std::min(minMatched, std::stoi(rows[i][3]));
   const auto cam = camera::loadCalibFile(sharedData("monoslam_testseq") + "/calib.txt");
-  const auto st = eval::reprojectionStats(eval::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"),
+  const auto st = refine::reprojectionStats(refine::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"),
                                                                   core::readTumTrajectory(out + "/trajectory.txt"),
                                                                   *cam, 1e-4, 8));
   std::printf("testseq single: median matched %.0f, min matched %d, final map %d; the estimate's poses leave %zu of %zu "
@@ -125,15 +125,15 @@ TEST(SystemRealData, MonoslamTestseqTrackedEndToEndWithoutKnownTarget)
 namespace
 {
 /** A bundle adjustment of a run's own measurements (searches.csv) started from `start`. */
-eval::TBundleProblem refinedFrom(const std::string& out, const core::TTrajectory& start, const std::string& calib,
-                                 eval::TReprojectionStats* before = nullptr)
+refine::TBundleProblem refinedFrom(const std::string& out, const core::TTrajectory& start, const std::string& calib,
+                                 refine::TReprojectionStats* before = nullptr)
 {
   const auto cam = camera::loadCalibFile(calib);
-  eval::TBundleProblem p = eval::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"), start, *cam, 1e-4, 8);
-  if (before) *before = eval::reprojectionStats(p);
-  const auto r = eval::bundleAdjust(p);
+  refine::TBundleProblem p = refine::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"), start, *cam, 1e-4, 8);
+  if (before) *before = refine::reprojectionStats(p);
+  const auto r = refine::bundleAdjust(p);
   EXPECT_TRUE(r.converged);
-  EXPECT_LT(eval::reprojectionStats(p).rmsPx, 1.0);
+  EXPECT_LT(refine::reprojectionStats(p).rmsPx, 1.0);
   return p;
 }
 
@@ -141,7 +141,7 @@ eval::TBundleProblem refinedFrom(const std::string& out, const core::TTrajectory
 struct TRefinedRun
 {
   core::TTrajectory est;
-  eval::TBundleProblem ba;
+  refine::TBundleProblem ba;
 };
 TRefinedRun runAndRefine(const std::string& config, const std::string& data, const std::string& name)
 {
@@ -173,7 +173,7 @@ TEST(SystemRealData, VispRbtGroundTruthDisagreesWithTheImagesAndTheEstimateAgree
   const auto gt = core::readTumTrajectory(sharedData("visp_rbt") + "/groundtruth.txt");
   const auto est = core::readTumTrajectory(out + "/trajectory.txt");
   const std::string calib = sharedData("visp_rbt") + "/calib.txt";
-  eval::TReprojectionStats gtStats, estStats;
+  refine::TReprojectionStats gtStats, estStats;
   const auto fromGt = refinedFrom(out, gt, calib, &gtStats);
   const auto fromEst = refinedFrom(out, est, calib, &estStats);
   const double baVsBa = eval::computeAte(fromEst.poses, fromGt.poses).rmseOverPath;
@@ -208,8 +208,8 @@ TEST(SystemRealData, ExactGroundTruthAndLongRealRunAgreeWithTheirMeasurements)
                       "output.plots=false", "--set", "output.search_log=true"}),
               0);
     const auto cam = camera::loadCalibFile(sharedData("monoslammot_synth19") + "/calib.txt");
-    const auto st = eval::reprojectionStats(
-        eval::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"),
+    const auto st = refine::reprojectionStats(
+        refine::makeBundleProblem(eval::readSearchesCsv(out + "/searches.csv"),
                                 core::readTumTrajectory(sharedData("monoslammot_synth19") + "/groundtruth.txt"), *cam,
                                 1e-4, 8));
     std::printf("synth19: ground truth leaves %zu of %zu features above 2 px, RMS %.2f px\n", st.featuresAbove,
@@ -270,6 +270,39 @@ TEST(SystemOutputs, RefinedTrajectoryOnlyWhenAsked)
   EXPECT_LT(s.ateRefined->rmseOverPath, 0.0044);
   // The filter's own outputs do not change.
   EXPECT_EQ(readFile(plain + "/trajectory.txt"), readFile(refined + "/trajectory.txt"));
+}
+
+TEST(SystemOutputs, SmoothedTrajectoryOnlyWhenAskedAndTheFilterUnchanged)
+{
+  // [output] smooth_trajectory: trajectory_smoothed.txt, one pose per processed frame, from the
+  // keyframe smoother's thread; its ATE, lag and CPU time in the summary; the filter's own outputs
+  // byte-identical to a run without it; not written unless asked.
+  const std::vector<std::string> base{sourceDir() + "/ini/imm7-shadow.ini", "--frames", "120", "--set",
+                                      "input.scenario=scenarios/handheld.ini", "--set", "output.plots=false"};
+  auto args = base;
+  const auto plain = outDir("smooth_off");
+  args.insert(args.end(), {"--out", plain});
+  ASSERT_EQ(runApp(args), 0);
+  EXPECT_FALSE(std::filesystem::exists(plain + "/trajectory_smoothed.txt"));
+
+  args = base;
+  const auto smoothed = outDir("smooth_on");
+  args.insert(args.end(), {"--out", smoothed, "--set", "output.smooth_trajectory=true"});
+  app::TRunSummary s;
+  ASSERT_EQ(runApp(args, &s), 0);
+  const auto traj = core::readTumTrajectory(smoothed + "/trajectory_smoothed.txt");
+  const auto filter = core::readTumTrajectory(smoothed + "/trajectory.txt");
+  ASSERT_EQ(traj.size(), filter.size());
+  for (std::size_t i = 0; i < traj.size(); ++i) EXPECT_EQ(traj[i].timestamp, filter[i].timestamp);
+  ASSERT_TRUE(s.ate && s.ateSmoothed);
+  std::printf("handheld 120 frames: filter %.3f %%, smoothed %.3f %% of path; lag median %.0f, max %.0f frames; "
+              "smoother CPU %.2f s\n",
+              100 * s.ate->rmseOverPath, 100 * s.ateSmoothed->rmseOverPath, s.smoothMedianLagFrames,
+              s.smoothMaxLagFrames, s.smoothCpuSeconds);
+  // Not an accuracy claim (doc/experiments/smoother.md): only that it stays near the filter.
+  EXPECT_LT(s.ateSmoothed->rmseOverPath, 2 * s.ate->rmseOverPath);
+  EXPECT_EQ(readFile(plain + "/trajectory.txt"), readFile(smoothed + "/trajectory.txt"));
+  EXPECT_EQ(readFile(plain + "/model_probabilities.csv"), readFile(smoothed + "/model_probabilities.csv"));
 }
 
 TEST(SystemOutputs, ContractFilesAndDeterminism)

@@ -1,7 +1,7 @@
 /* imm-monoslam — the outputs of a run (see CRunOutputs.h). */
 #include "CRunOutputs.h"
 
-#include <immslam/eval/reprojection.h>
+#include <immslam/refine/bundle_adjust.h>
 #include <immslam/eval/statistics.h>
 #include <immslam/sim/CSyntheticSource.h>
 
@@ -44,10 +44,10 @@ void refineTrajectory(const std::vector<eval::TSearchRow>& rows, const COutputFi
   const auto t0 = std::chrono::steady_clock::now();
   try
   {
-    eval::TBundleProblem prob = eval::makeBundleProblem(rows, out.trajectory(), cam, 1e-6, 8, 6);
-    const double before = eval::reprojectionStats(prob).rmsPx;
-    const eval::TBundleResult r = eval::bundleAdjust(prob);
-    const double after = eval::reprojectionStats(prob).rmsPx;
+    refine::TBundleProblem prob = refine::makeBundleProblem(rows, out.trajectory(), cam, 1e-6, 8, 6);
+    const double before = refine::reprojectionStats(prob).rmsPx;
+    const refine::TBundleResult r = refine::bundleAdjust(prob);
+    const double after = refine::reprojectionStats(prob).rmsPx;
     core::writeTumTrajectory(prob.poses, out.path("trajectory_refined.txt"));
     summary.refineSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::ostringstream m;
@@ -83,6 +83,11 @@ void CRunOutputs::addFrame(std::size_t processed, const io::TFrame& frame, const
   m_visuals.onFrame(processed, frame.colour.empty() ? frame.grey : frame.colour, fr, slam, m_files.trajectory());
   if (m_in.out.plots) addLabel(frame);  // the true labels are only drawn in the probability plot
   if (m_in.out.refine_trajectory) addRefineRows(fr);
+  if (m_in.out.smooth_trajectory)
+  {
+    if (!m_smoothing) m_smoothing = std::make_unique<CTrajectorySmoothing>(*m_in.cam);  // the camera is settled now
+    m_smoothing->addFrame(fr, m_files.trajectory().back());
+  }
   m_frameMs.push_back(fr.totalMs);
   m_matched.push_back(fr.slam->nMatched);
 }
@@ -146,6 +151,8 @@ void CRunOutputs::finish(const slam::CMonoSlamIMM& slam, TRunSummary& summary)
   }
   if (m_in.out.refine_trajectory)
     refineTrajectory(m_refineRows, m_files, *m_in.cam, m_in.source->groundTruth(), summary, log);
+  if (m_smoothing)
+    m_smoothing->finish(m_files.path("trajectory_smoothed.txt"), m_in.source->groundTruth(), summary, log);
   std::vector<std::string> warnings;
   m_visuals.finish(slam, m_files.trajectory(), m_in.source->groundTruth(), summary.ate, m_labels, warnings);
   for (const auto& w : warnings) log.logStr(mrpt::system::LVL_WARN, w);

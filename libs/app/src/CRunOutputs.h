@@ -9,9 +9,11 @@
 #include <immslam/eval/search_nis.h>
 #include <immslam/system/CMonoSlamSystem.h>
 
+#include "CTrajectorySmoothing.h"
 #include "run_inputs.h"
 
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -35,13 +37,15 @@ class CRunOutputs
   const COutputFiles& files() const { return m_files; }
 
   /** One processed frame: the files, the pictures, its true motion label (for the plots), its inlier
-   * matches ([output] refine_trajectory), its time and match count.
+   * matches ([output] refine_trajectory), the smoother ([output] smooth_trajectory), its time and
+   * match count.
    * \param processed the number of frames processed before this one. */
   void addFrame(std::size_t processed, const io::TFrame& frame, const system::TSystemFrame& fr,
                 const slam::CMonoSlamIMM& slam);
 
   /** At the end: warnings for frames without mask or tracks, map.csv, the frame statistics and the
-   * ATE of `summary`, trajectory_refined.txt (with the inputs' final camera), scene and plots
+   * ATE of `summary`, trajectory_refined.txt (with the inputs' final camera), trajectory_smoothed.txt,
+   * scene and plots
    * (warnings logged). */
   void finish(const slam::CMonoSlamIMM& slam, TRunSummary& summary);
 
@@ -59,6 +63,7 @@ class CRunOutputs
   std::map<long long, std::string> m_folderLabels;        ///< motion_labels.txt of a dataset folder
   std::vector<std::string> m_labels;                      ///< true label per processed frame (plots)
   std::vector<eval::TSearchRow> m_refineRows;             ///< matches used in the updates
+  std::unique_ptr<CTrajectorySmoothing> m_smoothing;      ///< [output] smooth_trajectory (made at the first frame)
   std::vector<double> m_frameMs, m_matched;               ///< per processed frame
 };
 }  // namespace immslam::app::detail

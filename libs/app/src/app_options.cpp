@@ -53,6 +53,7 @@ void TOutputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, 
   IMMSLAM_LOAD_BOOL(plots);
   IMMSLAM_LOAD_BOOL(search_log);
   IMMSLAM_LOAD_BOOL(refine_trajectory);
+  IMMSLAM_LOAD_BOOL(smooth_trajectory);
   IMMSLAM_LOAD_INT(gui_scene_every_n);
   core::requirePositive(gui_scene_every_n, s, "gui_scene_every_n");
   core::requireNonNegative(scene_every_n, s, "scene_every_n");
@@ -71,5 +72,7 @@ void TOutputOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const st
   MRPT_SAVE_CONFIG_VAR_COMMENT(search_log, "write searches.csv (every active search of every frame)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(refine_trajectory,
                                "at the end, bundle-adjust the run's own matches: trajectory_refined.txt (offline)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(smooth_trajectory,
+                               "keyframe-window bundle adjustment in a background thread: trajectory_smoothed.txt");
 }
 }  // namespace immslam::app

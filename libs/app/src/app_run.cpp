@@ -49,6 +49,8 @@ std::string summaryLine(const TRunSummary& sum, const std::string& outDir)
   }
   if (sum.ateRefined && sum.ateRefined->pathLength > 0)
     s << std::setprecision(2) << "; refined " << 100 * sum.ateRefined->rmseOverPath << " % of path";
+  if (sum.ateSmoothed && sum.ateSmoothed->pathLength > 0)
+    s << std::setprecision(2) << "; smoothed " << 100 * sum.ateSmoothed->rmseOverPath << " % of path";
   if (!sum.endReason.empty()) s << "; ended: " << sum.endReason;
   s << "; outputs in " << outDir;
   return s.str();

@@ -1,5 +1,5 @@
 /* Tests: association, Umeyama alignment, ATE/RPE, NEES and chi-square bands, confusion
- * matrix, statistics, and the ATE report of slam-eval run in-process. */
+ * matrix, statistics. */
 #include <gtest/gtest.h>
 #include <immslam/core/TTrajectory.h>
 #include <immslam/eval/alignment.h>
@@ -7,7 +7,6 @@
 #include <immslam/eval/ate.h>
 #include <immslam/eval/classification.h>
 #include <immslam/eval/consistency.h>
-#include <immslam/eval/eval_app.h>
 #include <immslam/eval/rpe.h>
 #include <immslam/eval/statistics.h>
 #include <immslam/math/numerical_jacobian.h>
@@ -683,42 +682,4 @@ TEST(Statistics, AgainstHandComputedValues)
   EXPECT_DOUBLE_EQ(s.median, 3.5);
   EXPECT_THROW(mean({}), std::invalid_argument);
   EXPECT_THROW(percentile(v, 101), std::invalid_argument);
-}
-
-// ---------------------------------------------------------------------------------------------
-// The ATE report (slam-eval ate, formerly imm-eval), in process.
-TEST(EvalApp, ExitCodesAndReport)
-{
-  std::mt19937 rng(16);
-  const core::TTrajectory gt = makeTrajectory(100);
-  const core::TTrajectory est = applySim3(randomSim3(rng, true), gt);
-  const std::string g = tempPath("app_gt.txt"), e = tempPath("app_est.txt"), bad = tempPath("app_bad.txt");
-  core::writeTumTrajectory(gt, g);
-  core::writeTumTrajectory(est, e);
-  writeText(bad, "1 2 3\n");
-  const auto run = [](std::vector<std::string> args, std::string* out = nullptr, std::string* err = nullptr) {
-    args.insert(args.begin(), "slam-eval ate");
-    std::ostringstream o, r;
-    const int rc = runEvalApp(args, o, r);
-    if (out) *out = o.str();
-    if (err) *err = r.str();
-    return rc;
-  };
-  std::string out, err;
-  EXPECT_EQ(run({e, g}, &out), 0);
-  EXPECT_NE(out.find("pairs                 : 100"), std::string::npos) << out;
-  EXPECT_NE(out.find("ATE / extent"), std::string::npos);
-  EXPECT_EQ(run({e, g, "--json", "--se3", "--max-dt", "0.02"}, &out), 0);
-  EXPECT_NE(out.find("\"alignment\": \"SE3\""), std::string::npos) << out;
-  EXPECT_NE(out.find("\"n_pairs\": 100,"), std::string::npos) << out;
-  EXPECT_EQ(run({"--help"}, &out), 0);
-  EXPECT_NE(out.find("Usage"), std::string::npos);
-  EXPECT_EQ(run({e}), 2);
-  EXPECT_EQ(run({e, g, "--max-dt"}), 2);
-  EXPECT_EQ(run({e, g, "--max-dt", "abc"}), 2);
-  EXPECT_EQ(run({e, g, "--bogus"}), 2);
-  EXPECT_EQ(run({e, bad}, nullptr, &err), 1);
-  EXPECT_NE(err.find(bad + ":1"), std::string::npos) << err;
-  EXPECT_EQ(run({tempPath("nope.txt"), g}, nullptr, &err), 1);
-  EXPECT_NE(err.find("nope.txt"), std::string::npos) << err;
 }

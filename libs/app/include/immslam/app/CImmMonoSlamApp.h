@@ -51,6 +51,9 @@ struct TRunSummary
   std::optional<eval::TAteResult> ate;   ///< against the input's ground truth, when it has one
   std::optional<eval::TAteResult> ateRefined;  ///< the same for trajectory_refined.txt ([output] refine_trajectory)
   double refineSeconds = 0;              ///< time of the final bundle adjustment
+  std::optional<eval::TAteResult> ateSmoothed;  ///< the same for trajectory_smoothed.txt ([output] smooth_trajectory)
+  double smoothMedianLagFrames = 0, smoothMaxLagFrames = 0;  ///< frames from a keyframe to its first smoothed pose
+  double smoothCpuSeconds = 0;           ///< CPU time of the smoother's thread
   std::string outDir;
 };
 

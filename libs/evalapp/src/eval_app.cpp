@@ -1,7 +1,7 @@
 /* imm-monoslam — the ATE report of slam-eval: ATE (and optionally RPE) of a TUM trajectory. */
 #include <immslam/core/TTrajectory.h>
 #include <immslam/eval/ate.h>
-#include <immslam/eval/eval_app.h>
+#include <immslam/evalapp/eval_app.h>
 #include <immslam/eval/rpe.h>
 
 #include <charconv>
@@ -12,8 +12,9 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace immslam::eval
+namespace immslam::evalapp
 {
+using namespace immslam::eval;
 namespace
 {
 struct TAppOptions
@@ -271,4 +272,4 @@ int runEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ost
   out << s.str();
   return 0;
 }
-}  // namespace immslam::eval
+}  // namespace immslam::evalapp

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-namespace immslam::eval
+namespace immslam::evalapp
 {
 /** Runs `PROG EST.txt GT.txt [--sim3|--se3|--no-align] [--max-dt S] [--rpe DELTA] [--json]`:
  * reads two TUM trajectories, computes the ATE (computeAte) and prints it as text or JSON to out.
@@ -19,4 +19,4 @@ int runEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ost
 
 /** The --help text. */
 std::string evalAppUsage(const std::string& programName);
-}  // namespace immslam::eval
+}  // namespace immslam::evalapp

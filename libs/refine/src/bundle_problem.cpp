@@ -1,13 +1,11 @@
-/* imm-monoslam — reprojection error of a trajectory against the measurements of searches.csv,
- * and a bundle adjustment of them (Triggs et al., "Bundle Adjustment — A Modern Synthesis", 2000:
- * Levenberg-Marquardt on the sparse normal equations, Huber weights by IRLS). */
+/* imm-monoslam — the bundle problem (see bundle_problem.h): measurements joined to poses, points
+ * triangulated, reprojection error of a trajectory against the measurements of searches.csv. */
 #include <immslam/camera/CCameraModel.h>
-#include <immslam/eval/reprojection.h>
+#include <immslam/refine/bundle_problem.h>
 #include <immslam/eval/statistics.h>
 #include <immslam/math/quaternion.h>
 
 #include <Eigen/SVD>
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <numeric>
 #include <cmath>
@@ -15,7 +13,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace immslam::eval
+namespace immslam::refine
 {
 namespace
 {
@@ -30,18 +28,6 @@ TPoseCW cameraFromWorld(const core::TStampedPose& p)
   const Mat3 R_WC = math::quatToRotation(p.q_W_C);
   return {R_WC.transpose(), -R_WC.transpose() * p.p_W_C};
 }
-
-void setFromCameraFromWorld(core::TStampedPose& p, const TPoseCW& c)
-{
-  const Mat3 R_WC = c.R.transpose();
-  p.p_W_C = -R_WC * c.t;
-  p.q_W_C = math::fromEigen(Eigen::Quaterniond(R_WC).normalized());
-}
-
-Mat3 expSO3(const Vec3& w) { return math::quatToRotation(math::quatFromRotationVector(w)); }
-
-double huberCost(double n, double k) { return n <= k ? n * n : 2 * k * n - k * k; }
-double huberWeight(double n, double k) { return n <= k ? 1.0 : k / n; }
 
 /** Index of the pose whose timestamp is nearest to t within maxDt, or -1. `order` sorts poses by
  * time. */
@@ -137,25 +123,6 @@ std::vector<TPoseCW> cameras(const TBundleProblem& p)
   return c;
 }
 
-/** Robust cost per used measurement (`used[i]`) with these cameras and points; infinity if a point
- * is behind a camera that uses it. */
-double robustCost(const std::vector<TPoseCW>& cams, const std::vector<Vec3>& X, const TBundleProblem& p, double k,
-                  const std::vector<char>& used)
-{
-  double c = 0;
-  std::size_t n = 0;
-  for (std::size_t i = 0; i < p.obs.size(); ++i)
-  {
-    if (!used[i]) continue;
-    const auto& o = p.obs[i];
-    Vec2 r;
-    if (!reprojectionResidual(cams[o.pose].R, cams[o.pose].t, X[o.point], o.xn, p.fx, p.fy, r))
-      return std::numeric_limits<double>::infinity();
-    c += huberCost(r.norm(), k);
-    ++n;
-  }
-  return n == 0 ? 0 : c / static_cast<double>(n);
-}
 /** Every point triangulated from the fixed poses (observations are grouped by point). */
 void triangulatePoints(TBundleProblem& p)
 {
@@ -194,7 +161,7 @@ bool reprojectionResidual(const Mat3& R_CW, const Vec3& t_CW, const Vec3& X_W, c
   return true;
 }
 
-TBundleProblem makeBundleProblem(const std::vector<TSearchRow>& rows, const core::TTrajectory& poses,
+TBundleProblem makeBundleProblem(const std::vector<eval::TSearchRow>& rows, const core::TTrajectory& poses,
                                  const camera::CCameraModel& cam, double maxDt, int minViews, int minPerPose)
 {
   if (minViews < 2) throw std::invalid_argument("makeBundleProblem: minViews must be >= 2");
@@ -302,8 +269,8 @@ TReprojectionStats reprojectionStats(const TBundleProblem& p, double thresholdPx
   }
   if (!s.featureRmsPx.empty())
   {
-    s.medianFeatureRmsPx = percentile(s.featureRmsPx, 50);
-    s.p90FeatureRmsPx = percentile(s.featureRmsPx, 90);
+    s.medianFeatureRmsPx = eval::percentile(s.featureRmsPx, 50);
+    s.p90FeatureRmsPx = eval::percentile(s.featureRmsPx, 90);
   }
   return s;
 }
@@ -314,7 +281,7 @@ TReprojectionStats triangulateAll(TBundleProblem& p, double thresholdPx)
   return reprojectionStats(p, thresholdPx);
 }
 
-std::vector<std::size_t> firstPoseOfEachComponent(const TBundleProblem& p, const std::vector<char>& used)
+std::vector<std::size_t> componentOfEachPose(const TBundleProblem& p, const std::vector<char>& used)
 {
   // Union-find over the poses: the used measurements of one point join their poses.
   std::vector<std::size_t> parent(p.poses.size());
@@ -337,122 +304,18 @@ std::vector<std::size_t> firstPoseOfEachComponent(const TBundleProblem& p, const
       if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the root is the component's first pose
     }
   }
-  std::vector<std::size_t> roots;
-  for (std::size_t i = 0; i < p.poses.size(); ++i)
-    if (find(i) == i) roots.push_back(i);
-  return roots;
+  std::vector<std::size_t> comp(p.poses.size());
+  for (std::size_t i = 0; i < p.poses.size(); ++i) comp[i] = find(i);
+  return comp;
 }
 
-TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
+std::vector<std::size_t> firstPoseOfEachComponent(const TBundleProblem& p, const std::vector<char>& used)
 {
-  const int nP = static_cast<int>(p.poses.size()), nX = static_cast<int>(p.points.size());
-  const int n = 6 * nP + 3 * nX;
-  auto cams = cameras(p);
-  auto X = p.points;
-  TBundleResult res;
-  // A measurement whose point starts behind its camera (a mismatch the triangulation could not place)
-  // has no residual: it is left out of the whole adjustment.
-  std::vector<char> used(p.obs.size(), 1);
-  for (std::size_t i = 0; i < p.obs.size(); ++i)
-  {
-    Vec2 r;
-    const auto& o = p.obs[i];
-    used[i] = reprojectionResidual(cams[o.pose].R, cams[o.pose].t, X[o.point], o.xn, p.fx, p.fy, r) ? 1 : 0;
-  }
-  res.unused = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
-  double cost = robustCost(cams, X, p, opts.huberPx, used);
-  res.initialCost = res.finalCost = cost;
-  if (p.obs.empty()) return res;
-
-  // The gauge of every connected part of the problem (poses linked by the points they share): a run
-  // that restarted its map (kidnapped, map given up) is several unrelated blocks, each with its own
-  // free pose; the first pose of each is held.
-  const std::vector<std::size_t> held = firstPoseOfEachComponent(p, used);
-  res.components = held.size();
-
-  double lambda = 1e-4;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
-  bool analysed = false;
-  for (res.iterations = 0; res.iterations < opts.maxIterations; ++res.iterations)
-  {
-    // Normal equations J^T W J d = -J^T W r (r = z - h, so J = d r / d params).
-    std::vector<Eigen::Triplet<double>> trip;
-    trip.reserve(p.obs.size() * 81 + static_cast<std::size_t>(n));
-    VecX g = VecX::Zero(n);
-    for (std::size_t i = 0; i < p.obs.size(); ++i)
-    {
-      if (!used[i]) continue;
-      const auto& o = p.obs[i];
-      Vec2 r;
-      Eigen::Matrix<double, 2, 6> Jp;
-      Mat23 Jx;
-      reprojectionResidual(cams[o.pose].R, cams[o.pose].t, X[o.point], o.xn, p.fx, p.fy, r, &Jp, &Jx);
-      const double w = huberWeight(r.norm(), opts.huberPx);
-      Eigen::Matrix<double, 2, 9> J;
-      J << Jp, Jx;
-      const Eigen::Matrix<double, 9, 9> H = w * J.transpose() * J;
-      const int ip = 6 * static_cast<int>(o.pose), ix = 6 * nP + 3 * static_cast<int>(o.point);
-      const int idx[9] = {ip, ip + 1, ip + 2, ip + 3, ip + 4, ip + 5, ix, ix + 1, ix + 2};
-      for (int a = 0; a < 9; ++a)
-      {
-        g[idx[a]] -= w * J.col(a).dot(r);
-        for (int b = 0; b < 9; ++b) trip.emplace_back(idx[a], idx[b], H(a, b));
-      }
-    }
-    for (const std::size_t k : held)  // gauge: the first pose of each component stays
-      for (int a = 0; a < 6; ++a) trip.emplace_back(6 * static_cast<int>(k) + a, 6 * static_cast<int>(k) + a, 1e10);
-    for (int i = 0; i < n; ++i) trip.emplace_back(i, i, 0.0);   // the whole diagonal in the pattern (damping)
-    Eigen::SparseMatrix<double> H(n, n);
-    H.setFromTriplets(trip.begin(), trip.end());
-    const VecX diag = H.diagonal();
-    // The sparsity pattern is the same for every iteration and damping: ordered and analysed once.
-    if (!analysed)
-    {
-      ldlt.analyzePattern(H);
-      analysed = true;
-    }
-
-    bool accepted = false;
-    while (!accepted && lambda <= 1e8)
-    {
-      Eigen::SparseMatrix<double> A = H;
-      for (int i = 0; i < n; ++i) A.coeffRef(i, i) += lambda * diag[i] + 1e-12;
-      ldlt.factorize(A);
-      if (ldlt.info() != Eigen::Success)
-      {
-        lambda *= 10;
-        continue;
-      }
-      const VecX d = ldlt.solve(g);
-      auto cams2 = cams;
-      auto X2 = X;
-      for (int i = 0; i < nP; ++i)
-      {
-        cams2[i].R = expSO3(d.segment<3>(6 * i)) * cams[i].R;
-        cams2[i].t = cams[i].t + d.segment<3>(6 * i + 3);
-      }
-      for (int j = 0; j < nX; ++j) X2[j] = X[j] + d.segment<3>(6 * nP + 3 * j);
-      const double c2 = robustCost(cams2, X2, p, opts.huberPx, used);
-      if (c2 < cost)
-      {
-        const bool small = cost - c2 <= 1e-9 * cost;
-        cams.swap(cams2);
-        X.swap(X2);
-        cost = c2;
-        lambda = std::max(lambda / 5, 1e-9);
-        accepted = true;
-        if (small) res.converged = true;
-      }
-      else
-        lambda *= 5;
-    }
-    if (!accepted) res.converged = true;  // no step lowers the cost: a minimum (to the damping's limit)
-    if (res.converged) break;
-  }
-  for (int i = 0; i < nP; ++i) setFromCameraFromWorld(p.poses[i], cams[i]);
-  p.points = X;
-  res.finalCost = cost;
-  return res;
+  const std::vector<std::size_t> comp = componentOfEachPose(p, used);
+  std::vector<std::size_t> roots;
+  for (std::size_t i = 0; i < comp.size(); ++i)
+    if (comp[i] == i) roots.push_back(i);
+  return roots;
 }
 
 std::string TReprojectionStats::summary() const
@@ -466,4 +329,4 @@ std::string TReprojectionStats::summary() const
      << featuresAbove << " features above " << thresholdPx << " px\n";
   return os.str();
 }
-}  // namespace immslam::eval
+}  // namespace immslam::refine

@@ -2,7 +2,7 @@
  * and input errors (1). The program itself is run on small files by apps/slam-eval's test. */
 #include <gtest/gtest.h>
 #include <immslam/core/TTrajectory.h>
-#include <immslam/eval/slam_eval_app.h>
+#include <immslam/evalapp/slam_eval_app.h>
 
 #include <filesystem>
 #include <fstream>
@@ -11,6 +11,7 @@
 
 using namespace immslam;
 using namespace immslam::eval;
+using namespace immslam::evalapp;
 
 namespace
 {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace immslam::eval
+namespace immslam::evalapp
 {
 /** Ground truth that this library cannot compute itself: the renderer (libs/sim) depends on eval,
  * so apps/slam-eval hands its functions in. Empty members make the features that need them a
@@ -47,4 +47,4 @@ int runSlamEvalApp(const std::vector<std::string>& args, std::ostream& out, std:
 
 /** The `slam-eval --help` text. */
 std::string slamEvalAppUsage(const std::string& programName);
-}  // namespace immslam::eval
+}  // namespace immslam::evalapp

@@ -1,10 +1,9 @@
-/* imm-monoslam — how well a camera trajectory explains the image measurements: every feature of
- * the app's searches.csv triangulated from the given poses (reprojection error per feature), and
- * a bundle adjustment of the same measurements (the best rigid explanation of them).
+/* imm-monoslam — the bundle problem: poses, points and the image measurements that join them (the
+ * matches of the app's searches.csv, or those a CKeyframeSmoother collected), every feature
+ * triangulated from the given poses, and its reprojection error per feature.
  *
  * Use: is a "ground truth" consistent with the images? is an estimate? how well do the images
- * determine the trajectory at all (two refinements from different starts that end equally good
- * but apart)? No estimator depends on this code; it only reads outputs. */
+ * determine the trajectory at all? bundleAdjust() (bundle_adjust.h) refines such a problem. */
 #pragma once
 
 #include <immslam/core/TTrajectory.h>
@@ -21,7 +20,7 @@ namespace immslam::camera
 class CCameraModel;
 }
 
-namespace immslam::eval
+namespace immslam::refine
 {
 /** One measurement: feature `point` seen from pose `pose` at the undistorted normalized image
  * point xn = (x/z, y/z) of the camera frame. */
@@ -61,7 +60,7 @@ bool reprojectionResidual(const Mat3& R_CW, const Vec3& t_CW, const Vec3& X_W, c
  * \throws std::invalid_argument if minViews < 2, minPerPose < 1 or maxDt < 0;
  * \throws std::runtime_error if no feature has minViews joined measurements (the message says how
  *         many rows were used and joined: a wrong trajectory file shows as 0 joined). */
-TBundleProblem makeBundleProblem(const std::vector<TSearchRow>& rows, const core::TTrajectory& poses,
+TBundleProblem makeBundleProblem(const std::vector<eval::TSearchRow>& rows, const core::TTrajectory& poses,
                                  const camera::CCameraModel& cam, double maxDt, int minViews,
                                  int minPerPose = 6);
 
@@ -89,31 +88,13 @@ TReprojectionStats triangulateAll(TBundleProblem& problem, double thresholdPx = 
 /** Statistics of the problem as it is (no re-triangulation). */
 TReprojectionStats reprojectionStats(const TBundleProblem& problem, double thresholdPx = 2);
 
-/** Bundle adjustment options and result. */
-struct TBundleOptions
-{
-  double huberPx = 2;      ///< Huber threshold of the robust cost (pixels)
-  int maxIterations = 100;  ///< Levenberg-Marquardt iterations
-};
-struct TBundleResult
-{
-  int iterations = 0;
-  double initialCost = 0, finalCost = 0;  ///< robust cost per measurement (px^2)
-  bool converged = false;                 ///< relative cost decrease below 1e-9 or damping exhausted
-  std::size_t unused = 0;                 ///< measurements left out: their point starts behind the camera
-  std::size_t components = 0;             ///< unrelated blocks of poses and points (one per map of the run)
-};
-
 /** The first pose (lowest index) of each connected component of the problem, poses being connected
  * by the points they measure (measurements with used[i] == 0 ignored; empty `used`: all): one
  * component per map of a run that started a new map (kidnapped, map given up), each with its own
  * gauge. A pose measuring nothing is a component of its own. */
 std::vector<std::size_t> firstPoseOfEachComponent(const TBundleProblem& p, const std::vector<char>& used = {});
 
-/** Levenberg-Marquardt bundle adjustment of all poses and points with a Huber cost, sparse normal
- * equations (Eigen SimplicialLDLT). The gauge: the first pose of each connected component
- * (firstPoseOfEachComponent()) is held by a stiff prior; the scale direction is left to the damping
- * (the cost does not change along it, so neither does the solution). Pose timestamps are kept. */
-TBundleResult bundleAdjust(TBundleProblem& problem, const TBundleOptions& opts = {});
+/** The component of every pose (the index of its first pose, as firstPoseOfEachComponent()). */
+std::vector<std::size_t> componentOfEachPose(const TBundleProblem& p, const std::vector<char>& used = {});
 
-}  // namespace immslam::eval
+}  // namespace immslam::refine

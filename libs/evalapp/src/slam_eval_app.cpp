@@ -3,12 +3,12 @@
 #include <immslam/eval/ate.h>
 #include <immslam/eval/classification_truth.h>
 #include <immslam/core/TTrajectory.h>
-#include <immslam/eval/eval_app.h>
-#include <immslam/eval/reprojection.h>
+#include <immslam/evalapp/eval_app.h>
+#include <immslam/refine/bundle_adjust.h>
 #include <immslam/camera/CCameraModel.h>
 #include <immslam/eval/search_nis.h>
 #include <immslam/eval/segmentation.h>
-#include <immslam/eval/slam_eval_app.h>
+#include <immslam/evalapp/slam_eval_app.h>
 
 #include <algorithm>
 #include <charconv>
@@ -19,8 +19,10 @@
 #include <ostream>
 #include <stdexcept>
 
-namespace immslam::eval
+namespace immslam::evalapp
 {
+using namespace immslam::eval;
+using namespace immslam::refine;
 namespace
 {
 struct TUsageError : std::runtime_error
@@ -397,4 +399,4 @@ int runSlamEvalApp(const std::vector<std::string>& args, std::ostream& out, std:
     return 1;
   }
 }
-}  // namespace immslam::eval
+}  // namespace immslam::evalapp

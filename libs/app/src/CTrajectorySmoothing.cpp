@@ -1,0 +1,67 @@
+/* imm-monoslam — [output] smooth_trajectory (see CTrajectorySmoothing.h). */
+#include "CTrajectorySmoothing.h"
+
+#include <immslam/eval/statistics.h>
+
+#include <chrono>
+#include <iomanip>
+#include <sstream>
+
+namespace immslam::app::detail
+{
+CTrajectorySmoothing::CTrajectorySmoothing(const camera::CCameraModel& cam)
+    : m_cam(cam), m_smoother(refine::CKeyframeSmoother::TOptions{}, cam.fx(), cam.fy())
+{
+}
+
+void CTrajectorySmoothing::addFrame(const system::TSystemFrame& fr, const core::TStampedPose& pose)
+{
+  refine::TSmootherFrame f;
+  f.pose = pose;
+  for (const auto& sr : fr.slam->searches)
+  {
+    if (sr.status != slam::TSearchRecord::EStatus::LowInnovationInlier &&
+        sr.status != slam::TSearchRecord::EStatus::RescuedInlier)
+      continue;
+    const math::Bearing b = m_cam.unproject(sr.z);
+    const Vec3& d = b.unitVector();
+    if (d.z() > 0) f.matches.push_back({sr.id, Vec2(d.x() / d.z(), d.y() / d.z())});
+  }
+  m_smoother.addFrame(std::move(f));
+}
+
+void CTrajectorySmoothing::finish(const std::string& path, const std::optional<core::TTrajectory>& gt,
+                                  TRunSummary& summary, mrpt::system::COutputLogger& log)
+{
+  const auto t0 = std::chrono::steady_clock::now();
+  m_smoother.finish();
+  const double wait = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const core::TTrajectory traj = m_smoother.trajectory();
+  core::writeTumTrajectory(traj, path);
+  const refine::TSmootherStats st = m_smoother.stats();
+  summary.smoothCpuSeconds = st.cpuSeconds;
+  if (!st.lagFrames.empty())
+  {
+    summary.smoothMedianLagFrames = eval::median(st.lagFrames);
+    summary.smoothMaxLagFrames = *std::max_element(st.lagFrames.begin(), st.lagFrames.end());
+  }
+  std::ostringstream m;
+  m << std::fixed << std::setprecision(2) << "trajectory_smoothed.txt: " << traj.size() << " poses, " << st.keyframes
+    << " keyframes, " << st.optimisations << " window optimisations; lag median " << summary.smoothMedianLagFrames
+    << " frames, max " << summary.smoothMaxLagFrames << "; smoother CPU " << st.cpuSeconds << " s ("
+    << 100 * st.cpuSeconds / std::max(summary.wallSeconds, 1e-9) << " % of the run's wall time), " << wait
+    << " s waited for it at the end";
+  log.logStr(mrpt::system::LVL_INFO, m.str());
+  if (gt && traj.size() >= 3)
+  {
+    try
+    {
+      summary.ateSmoothed = eval::computeAte(traj, *gt, eval::EAlignment::Sim3, 0.01);
+    }
+    catch (const std::exception& e)
+    {
+      log.logStr(mrpt::system::LVL_WARN, std::string("no ATE of the smoothed trajectory: ") + e.what());
+    }
+  }
+}
+}  // namespace immslam::app::detail

@@ -1,0 +1,37 @@
+/* imm-monoslam — private to libs/app: [output] smooth_trajectory, the online keyframe smoother
+ * (refine::CKeyframeSmoother) fed with every frame's pose and the matches of its update, and
+ * trajectory_smoothed.txt written at the end with its ATE, lag and CPU share. */
+#pragma once
+
+#include <immslam/app/CImmMonoSlamApp.h>
+#include <immslam/camera/CCameraModel.h>
+#include <immslam/refine/CKeyframeSmoother.h>
+#include <immslam/system/CMonoSlamSystem.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace immslam::app::detail
+{
+/** Feeds the smoother (its own thread: the frame loop only hands data over) and writes its output. */
+class CTrajectorySmoothing
+{
+ public:
+  /** \param cam the camera that undistorts the matched pixels (kept by reference). */
+  explicit CTrajectorySmoothing(const camera::CCameraModel& cam);
+
+  /** One processed frame: the filter's pose and the low-innovation and rescued inliers of its
+   * update, as undistorted normalised points. */
+  void addFrame(const system::TSystemFrame& fr, const core::TStampedPose& pose);
+
+  /** Stops the smoother, writes `path` (TUM, every frame), fills the summary's smoothed ATE (when
+   * `gt` is given), lag and CPU share, and logs one line. */
+  void finish(const std::string& path, const std::optional<core::TTrajectory>& gt, TRunSummary& summary,
+              mrpt::system::COutputLogger& log);
+
+ private:
+  const camera::CCameraModel& m_cam;
+  refine::CKeyframeSmoother m_smoother;
+};
+}  // namespace immslam::app::detail

@@ -1,0 +1,48 @@
+/* imm-monoslam — bundle adjustment of a TBundleProblem on Ceres: every pose and point refined to
+ * minimise a robust (Huber) reprojection cost, with the gauge held by chosen poses. The offline
+ * refinement of a whole run ([output] refine_trajectory, slam-eval reprojection --refine) and each
+ * window of the online CKeyframeSmoother run this same function. */
+#pragma once
+
+#include <immslam/refine/bundle_problem.h>
+
+#include <cstddef>
+#include <vector>
+
+namespace immslam::refine
+{
+/** Bundle adjustment options. */
+struct TBundleOptions
+{
+  double huberPx = 2;       ///< Huber threshold of the robust cost (pixels)
+  int maxIterations = 100;  ///< Levenberg-Marquardt iterations
+  /** Poses held fixed (the gauge). Empty: the first pose of each connected component
+   * (firstPoseOfEachComponent()). Otherwise these, plus the first pose of every component that
+   * holds none of them. Holding two poses of a component fixes its scale as well. */
+  std::vector<std::size_t> heldPoses;
+};
+
+/** What a bundle adjustment did. */
+struct TBundleResult
+{
+  int iterations = 0;
+  double initialCost = 0, finalCost = 0;  ///< robust cost per measurement (px^2)
+  bool converged = false;                 ///< the solver met a convergence tolerance
+  std::size_t unused = 0;                 ///< measurements left out: their point starts behind the camera
+  std::size_t components = 0;             ///< unrelated blocks of poses and points (one per map of the run)
+};
+
+/** Levenberg-Marquardt bundle adjustment (Triggs et al., "Bundle Adjustment — A Modern Synthesis",
+ * 2000) of all poses and points on Ceres (Schur complement on the points), one residual block per
+ * measurement: reprojectionResidual()'s r = (fx (x - q_x/q_z), fy (y - q_y/q_z)), q = R_CW X + t_CW,
+ * with a Huber loss, cost per measurement \f$\rho(|r|^2)\f$, \f$\rho(s) = s\f$ for
+ * \f$s \le k^2\f$ and \f$2k\sqrt{s} - k^2\f$ beyond (k = huberPx). Rotations R_CW are unit
+ * quaternions on their manifold (updates exp(dtheta) q), translations and points Euclidean.
+ * A measurement whose point starts behind its camera is left out (TBundleResult::unused); a step
+ * that would put a used point behind its camera is rejected. The gauge: TBundleOptions::heldPoses.
+ * The scale of a component held by one pose is left to the damping (the cost does not change along
+ * it). Pose timestamps are kept; poses that measure nothing are not changed. Single-threaded and
+ * deterministic. */
+TBundleResult bundleAdjust(TBundleProblem& problem, const TBundleOptions& opts = {});
+
+}  // namespace immslam::refine

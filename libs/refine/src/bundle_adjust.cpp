@@ -1,0 +1,145 @@
+/* imm-monoslam — bundle adjustment on Ceres (see bundle_adjust.h). */
+#include <immslam/math/quaternion.h>
+#include <immslam/refine/bundle_adjust.h>
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace immslam::refine
+{
+namespace
+{
+/** One measurement's residual, reprojectionResidual() with automatic derivatives: pose blocks are
+ * q_CW (Eigen order x, y, z, w) and t_CW, the point block X_W. */
+struct TReprojectionCost
+{
+  Vec2 xn;
+  double fx, fy;
+
+  template <typename T>
+  bool operator()(const T* q_CW, const T* t_CW, const T* X_W, T* r) const
+  {
+    const Eigen::Map<const Eigen::Quaternion<T>> q(q_CW);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(t_CW), X(X_W);
+    const Eigen::Matrix<T, 3, 1> p = q * X + t;
+    if (!(p.z() > T(0))) return false;  // behind the camera: the step is rejected
+    r[0] = T(fx) * (T(xn.x()) - p.x() / p.z());
+    r[1] = T(fy) * (T(xn.y()) - p.y() / p.z());
+    return true;
+  }
+};
+
+/** A pose as Ceres parameter blocks (camera from world). */
+struct TPoseBlocks
+{
+  double q[4];  // x, y, z, w
+  double t[3];
+};
+
+TPoseBlocks toBlocks(const core::TStampedPose& p)
+{
+  const Eigen::Quaterniond q_WC = math::toEigen(p.q_W_C);
+  const Eigen::Quaterniond q_CW = q_WC.normalized().conjugate();
+  const Vec3 t_CW = -(q_CW * p.p_W_C);
+  return {{q_CW.x(), q_CW.y(), q_CW.z(), q_CW.w()}, {t_CW.x(), t_CW.y(), t_CW.z()}};
+}
+
+void fromBlocks(const TPoseBlocks& b, core::TStampedPose& p)
+{
+  const Eigen::Quaterniond q_CW = Eigen::Quaterniond(b.q[3], b.q[0], b.q[1], b.q[2]).normalized();
+  const Eigen::Quaterniond q_WC = q_CW.conjugate();
+  p.p_W_C = -(q_WC * Vec3(b.t[0], b.t[1], b.t[2]));
+  p.q_W_C = math::fromEigen(q_WC);
+}
+
+/** The held poses: those asked for, and the first pose of every component holding none of them. */
+std::vector<std::size_t> heldPoses(const TBundleProblem& p, const std::vector<char>& used,
+                                   const std::vector<std::size_t>& asked)
+{
+  const std::vector<std::size_t> comp = componentOfEachPose(p, used);
+  std::set<std::size_t> held, heldComponents;
+  for (const std::size_t i : asked)
+    if (i < p.poses.size()) held.insert(i), heldComponents.insert(comp[i]);
+  for (std::size_t i = 0; i < comp.size(); ++i)
+    if (comp[i] == i && !heldComponents.count(i)) held.insert(i);
+  return {held.begin(), held.end()};
+}
+
+double huberCost(double n, double k) { return n <= k ? n * n : 2 * k * n - k * k; }
+}  // namespace
+
+TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
+{
+  TBundleResult res;
+  std::vector<TPoseBlocks> poses;
+  poses.reserve(p.poses.size());
+  for (const auto& pose : p.poses) poses.push_back(toBlocks(pose));
+  // A measurement whose point starts behind its camera (a mismatch the triangulation could not
+  // place) has no residual: it is left out of the whole adjustment.
+  std::vector<char> used(p.obs.size(), 1);
+  double cost0 = 0;
+  for (std::size_t i = 0; i < p.obs.size(); ++i)
+  {
+    const auto& o = p.obs[i];
+    Vec2 r;
+    const Mat3 R_CW = Eigen::Quaterniond(poses[o.pose].q[3], poses[o.pose].q[0], poses[o.pose].q[1], poses[o.pose].q[2])
+                          .toRotationMatrix();
+    const Vec3 t_CW(poses[o.pose].t[0], poses[o.pose].t[1], poses[o.pose].t[2]);
+    used[i] = reprojectionResidual(R_CW, t_CW, p.points[o.point], o.xn, p.fx, p.fy, r) ? 1 : 0;
+    if (used[i]) cost0 += huberCost(r.norm(), opts.huberPx);
+  }
+  res.unused = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
+  const std::size_t nUsed = p.obs.size() - res.unused;
+  res.initialCost = res.finalCost = nUsed ? cost0 / static_cast<double>(nUsed) : 0;
+  res.components = firstPoseOfEachComponent(p, used).size();
+  if (nUsed == 0) return res;
+
+  ceres::Problem::Options po;
+  po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(po);
+  ceres::EigenQuaternionManifold quaternion;
+  ceres::HuberLoss huber(opts.huberPx);  // rho(s) = s or 2 k sqrt(s) - k^2: the cost above
+  std::vector<Vec3> X = p.points;
+  for (std::size_t i = 0; i < p.obs.size(); ++i)
+  {
+    if (!used[i]) continue;
+    const auto& o = p.obs[i];
+    auto* cost = new ceres::AutoDiffCostFunction<TReprojectionCost, 2, 4, 3, 3>(new TReprojectionCost{o.xn, p.fx, p.fy});
+    problem.AddResidualBlock(cost, &huber, poses[o.pose].q, poses[o.pose].t, X[o.point].data());
+  }
+  for (auto& b : poses)
+    if (problem.HasParameterBlock(b.q)) problem.SetManifold(b.q, &quaternion);
+  for (const std::size_t k : heldPoses(p, used, opts.heldPoses))
+    if (problem.HasParameterBlock(poses[k].q))
+    {
+      problem.SetParameterBlockConstant(poses[k].q);
+      problem.SetParameterBlockConstant(poses[k].t);
+    }
+
+  ceres::Solver::Options so;
+  so.linear_solver_type = p.poses.size() <= 60 || !ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE)
+                              ? ceres::DENSE_SCHUR
+                              : ceres::SPARSE_SCHUR;
+  so.max_num_iterations = opts.maxIterations;
+  so.function_tolerance = 1e-10;
+  so.gradient_tolerance = 1e-12;
+  so.parameter_tolerance = 1e-10;
+  so.num_threads = 1;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+
+  res.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  res.converged = summary.termination_type == ceres::CONVERGENCE;
+  // Ceres' cost is 1/2 sum rho(|r|^2): twice it per measurement is the cost above.
+  res.finalCost = 2 * summary.final_cost / static_cast<double>(nUsed);
+  for (std::size_t i = 0; i < p.poses.size(); ++i) fromBlocks(poses[i], p.poses[i]);
+  p.points = X;
+  return res;
+}
+}  // namespace immslam::refine
