@@ -7,7 +7,7 @@
 #endif
 
 #include <immslam/camera/CCameraModel.h>
-#include <immslam/slam/CSlamTracker.h>
+#include <immslam/tracking/CSlamTracker.h>
 
 #include <Eigen/LU>
 #include <gtest/gtest.h>

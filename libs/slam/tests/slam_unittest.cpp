@@ -7,9 +7,9 @@
 #include <immslam/math/chi2.h>
 #include <immslam/math/numerical_jacobian.h>
 #include <immslam/math/quaternion.h>
-#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/tracking/CMonoSlamIMM.h>
 #include <immslam/slam/measurement.h>
-#include <immslam/slam/relocalise.h>
+#include <immslam/tracking/relocalise.h>
 #include <immslam/slam/robocentric_prediction.h>
 #include <immslam/slam/state_ops.h>
 

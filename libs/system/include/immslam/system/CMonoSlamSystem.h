@@ -7,7 +7,7 @@
 
 #include <immslam/camera/CCameraModel.h>
 #include <immslam/shadow/CShadowFilter.h>
-#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/tracking/CMonoSlamIMM.h>
 
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/config/CLoadableOptions.h>

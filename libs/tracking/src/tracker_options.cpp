@@ -1,7 +1,7 @@
 /* imm-monoslam — options of the SLAM tracker ([slam]). */
 #include <immslam/core/config.h>
 #include <immslam/math/chi2.h>
-#include <immslam/slam/CSlamTracker.h>
+#include <immslam/tracking/CSlamTracker.h>
 
 #include <cmath>
 
