@@ -17,6 +17,8 @@
 #include <limits>
 #include <random>
 
+#include "../../motion/tests/world_motion_model.h"  // ground truth of the simulations
+
 using namespace immslam;
 using namespace immslam::slam;
 

@@ -64,7 +64,7 @@ TShadowState initialiseShadowState(const camera::CCameraModel& cam, const Vec2& 
  * \f[ \mathbf h'_{xyz} = R^\top\big(\mathbf h_{xyz} + (\mathbf u + w\mathbf V)\,dt - w\,\mathbf t\big),\quad
  *     w' = w,\quad \mathbf u' = R^\top(\mathbf u + w\mathbf V), \f]
  * linear in the state (a point at infinity, w = 0, only rotates). \f$ \mathbf V \f$ is the velocity
- * impulse of an acceleration noise (as motion::predictCamera). Not gauge-normalized.
+ * impulse of an acceleration noise (as the motion models do). Not gauge-normalized.
  * \param J_x   d x'/d x (7x7);
  * \param J_inc d x'/d [dt; dtheta] of the increment's perturbation (7x6):
  *              \f$ \partial\mathbf h'_{xyz}/\partial\delta t = -w R^\top \f$,
