@@ -16,7 +16,7 @@
 #include <immslam/math/parallel.h>
 #include <immslam/math/quaternion.h>
 #include <immslam/motion/motion_models.h>
-#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/tracking/CMonoSlamIMM.h>
 #include <immslam/slam/robocentric_prediction.h>
 
 #include <cmath>

@@ -7,6 +7,7 @@
 #include "bench_common.h"
 
 #include <immslam/frontend/frontend.h>
+#include <immslam/tracking/CShadowTracker.h>
 
 #include <algorithm>
 #include <chrono>
@@ -49,7 +50,7 @@ void BM_ShadowProcessFrame(benchmark::State& st)
     CShadowFilter::TOptions opts;
     opts.max_pending_frames = 1000;  // keep the features: the cost is measured with n held
     opts.static_min_velocity_px = 1e-6;
-    CShadowFilter filter(opts, scene.cam);
+    CShadowTracker filter(opts, scene.cam);
     double seconds = 0;
     int timed = 0;
     for (int k = 0; k < static_cast<int>(frames.size()); ++k)

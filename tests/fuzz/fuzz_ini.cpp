@@ -6,7 +6,7 @@
 #include <immslam/core/config.h>
 #include <immslam/shadow/CShadowFilter.h>
 #include <immslam/sim/TScenario.h>
-#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/tracking/CMonoSlamIMM.h>
 #include <immslam/system/CMonoSlamSystem.h>
 
 #include <mrpt/config/CConfigFileMemory.h>

@@ -8,7 +8,7 @@ function(run)
 endfunction()
 run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${PREFIX})
 foreach(f bin/imm-monoslam bin/dataset2rawlog bin/imm-render bin/imm-composite share/imm-monoslam/ini/imm7-shadow.ini
-          share/doc/imm-monoslam/usage.md lib/cmake/immslam/immslamConfig.cmake include/immslam/slam/CMonoSlamIMM.h)
+          share/doc/imm-monoslam/usage.md lib/cmake/immslam/immslamConfig.cmake include/immslam/tracking/CMonoSlamIMM.h)
   if(NOT EXISTS ${PREFIX}/${f})
     message(FATAL_ERROR "not installed: ${f}")
   endif()

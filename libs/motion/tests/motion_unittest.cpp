@@ -6,6 +6,8 @@
 
 #include <random>
 
+#include "world_motion_model.h"
+
 using namespace immslam;
 using namespace immslam::motion;
 

@@ -1,6 +1,5 @@
-/* imm-monoslam — the MonoSLAMBOT shadow filter: wiring of the per-feature EKF, the active search and
- * the static/dynamic classifier. */
-#include <immslam/math/chi2.h>
+/* imm-monoslam — the MonoSLAMBOT shadow filter: wiring of the per-feature EKF and the static/dynamic
+ * classifier (the image search is the caller's). */
 #include <immslam/math/quaternion.h>
 #include <immslam/shadow/CShadowFilter.h>
 
@@ -36,9 +35,6 @@ CShadowFilter::CShadowFilter(const TOptions& opts, camera::CCameraModel::Ptr cam
   const double f = m_cam->fx();
   m_sigmaV = m_opts.init_velocity_std_px / f;
   m_sigmaA = m_opts.sigma_accel_px / f;
-  m_search.gateChi2 = math::chi2Quantile(m_opts.search_probability, 2);
-  m_search.minScore = m_opts.min_ncc;
-  m_search.maxHalfExtentPx = m_opts.max_search_half_extent_px;
 }
 
 std::size_t CShadowFilter::numPending() const
@@ -72,10 +68,8 @@ std::vector<Vec2> CShadowFilter::occupiedPixels() const
   return out;
 }
 
-std::vector<std::int64_t> CShadowFilter::addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv)
+std::vector<std::int64_t> CShadowFilter::addFeatures(const std::vector<Vec2>& uv)
 {
-  if (!grey.empty() && (grey.type() != CV_8UC1 || grey.cols != m_cam->width() || grey.rows != m_cam->height()))
-    throw std::runtime_error("shadow::CShadowFilter::addFeatures: expected a CV_8UC1 image of the camera's size");
   std::vector<std::int64_t> ids;
   ids.reserve(uv.size());
   for (const Vec2& p : uv)
@@ -86,11 +80,6 @@ std::vector<std::int64_t> CShadowFilter::addFeatures(const cv::Mat& grey, const 
       continue;
     }
     TShadowFeature f;
-    if (!grey.empty() && !f.patch.extract(grey, p, m_opts.patch_half_size))
-    {
-      ids.push_back(-1);
-      continue;
-    }
     f.ekf = initialiseShadowState(*m_cam, p, m_opts.sigma_pixel, m_opts.init_rho, m_opts.init_rho_std, m_sigmaV);
     f.id = m_ids ? m_ids() : m_nextId++;
     f.firstFrame = m_motion.frame;
@@ -145,39 +134,6 @@ void CShadowFilter::updateFeature(TShadowFeature& f, const Vec2& z)
   ++f.nMeasured;
   if (f.cls == EShadowClass::Pending) f.track.addView(z);
   ++m_report.nMeasured;
-}
-
-void CShadowFilter::searchAll(const cv::Mat& grey, const cv::Mat& excluded)
-{
-  const auto t0 = std::chrono::steady_clock::now();
-  double tUpdate = 0;
-  for (auto& f : m_features)
-  {
-    if (!f.patch.valid() || !f.predicted.allFinite() || !m_cam->isInImage(f.predicted, m_opts.patch_half_size + 1))
-      continue;
-    // Predicted appearance: the plane facing the first camera through the current estimate, in C0.
-    Mat2 A = Mat2::Identity();
-    if (m_opts.warp_patches)
-    {
-      TShadowState s = f.ekf;
-      s.x[kW] = std::max(s.x[kW], 0.01);
-      const Vec3 p_C0 = f.track.T_0k.transform(shadowPosition(s));
-      A = frontend::patchWarp(*m_cam, Vec3::Zero(), Vec4(1, 0, 0, 0), f.track.T_0k.t, f.track.T_0k.q, p_C0,
-                              Vec3::Zero());
-    }
-    f.patch.predictTemplate(A, m_templ);
-    f.searched = true;
-    ++m_report.nSearched;
-    const frontend::TSearchResult res = frontend::searchInEllipse(grey, m_templ, f.predicted, f.S, m_search, m_ws);
-    if (res.found && !frontend::maskedAt(excluded, res.uv))
-    {
-      const auto tu = std::chrono::steady_clock::now();
-      updateFeature(f, res.uv);
-      tUpdate += msSince(tu);
-    }
-  }
-  m_report.tUpdateMs = tUpdate;
-  m_report.tSearchMs = msSince(t0) - tUpdate;
 }
 
 TPromotion CShadowFilter::makePromotion(const TShadowFeature& f, const TRayTestResult& r) const
@@ -347,18 +303,33 @@ void CShadowFilter::endFrame()
   m_report.timeMs = msSince(m_t0);
 }
 
-const TShadowReport& CShadowFilter::processFrame(const TCameraMotion& motion, const cv::Mat& grey,
-                                                 const cv::Mat& excluded)
+void CShadowFilter::predict(const TCameraMotion& motion)
 {
-  if (grey.empty() || grey.type() != CV_8UC1 || grey.cols != m_cam->width() || grey.rows != m_cam->height())
-    throw std::runtime_error("shadow::CShadowFilter::processFrame: expected a CV_8UC1 image of the camera's size "
-                             "at frame " + std::to_string(motion.frame));
-  if (!excluded.empty() && (excluded.type() != CV_8UC1 || excluded.size() != grey.size()))
-    throw std::runtime_error("shadow::CShadowFilter::processFrame: the exclusion mask must be empty or CV_8UC1 of the "
-                             "image's size at frame " + std::to_string(motion.frame));
   beginFrame(motion);
   predictAll(m_motion);
-  searchAll(grey, frontend::growExclusion(excluded, m_opts.patch_half_size));
+}
+
+void CShadowFilter::update(const std::vector<TShadowMatch>& matches)
+{
+  const auto t0 = std::chrono::steady_clock::now();
+  std::unordered_map<std::int64_t, std::size_t> index;
+  for (std::size_t i = 0; i < m_features.size(); ++i) index.emplace(m_features[i].id, i);
+  for (const TShadowMatch& m : matches)
+  {
+    const auto it = index.find(m.id);
+    if (it == index.end()) continue;
+    TShadowFeature& f = m_features[it->second];
+    if (f.measured) continue;  // one measurement per feature and frame
+    f.searched = true;
+    ++m_report.nSearched;
+    if (m.found && m.uv.allFinite()) updateFeature(f, m.uv);
+  }
+  m_report.tUpdateMs += msSince(t0);
+}
+
+const TShadowReport& CShadowFilter::finishFrame(double searchMs)
+{
+  m_report.tSearchMs = searchMs;
   classifyAndManage();
   endFrame();
   return m_report;
@@ -367,24 +338,12 @@ const TShadowReport& CShadowFilter::processFrame(const TCameraMotion& motion, co
 const TShadowReport& CShadowFilter::processMeasurements(const TCameraMotion& motion,
                                                         const std::vector<std::pair<std::int64_t, Vec2>>& z)
 {
-  beginFrame(motion);
-  predictAll(m_motion);
-  const auto t0 = std::chrono::steady_clock::now();
-  std::unordered_map<std::int64_t, std::size_t> index;
-  for (std::size_t i = 0; i < m_features.size(); ++i) index.emplace(m_features[i].id, i);
+  predict(motion);
+  std::vector<TShadowMatch> matches;
+  matches.reserve(z.size());
   for (const auto& [id, uv] : z)
-  {
-    const auto it = index.find(id);
-    if (it == index.end() || !uv.allFinite()) continue;
-    TShadowFeature& f = m_features[it->second];
-    if (f.measured) continue;  // one measurement per feature and frame
-    f.searched = true;
-    ++m_report.nSearched;
-    updateFeature(f, uv);
-  }
-  m_report.tUpdateMs = msSince(t0);
-  classifyAndManage();
-  endFrame();
-  return m_report;
+    if (uv.allFinite()) matches.push_back({id, true, uv});
+  update(matches);
+  return finishFrame();
 }
 }  // namespace immslam::shadow

@@ -1,8 +1,8 @@
 /* imm-monoslam — the shadow filter's per-feature EKF (MonoSLAMBOT eqs. 1-5). */
+#include <immslam/bayes/ekf_update.h>
 #include <immslam/math/quaternion.h>
 #include <immslam/shadow/feature_ekf.h>
 
-#include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
@@ -130,33 +130,42 @@ bool shadowInnovation(const TShadowState& s, const camera::CCameraModel& cam, do
 bool updateShadowState(TShadowState& s, const camera::CCameraModel& cam, const Vec2& z, double sigmaPx,
                        int iterations, double* nis)
 {
-  const Mat2 R = sigmaPx * sigmaPx * Mat2::Identity();
-  const Vec7 x0 = s.x;
-  Vec7 xi = x0;
-  Mat27 H;
-  Eigen::Matrix<double, 7, 2> K;
-  Vec2 h;
+  // The covariance algebra is bayes::ekfUpdate's (S = H P H^T + R, x += K nu, P -= K S K^T);
+  // h(x) is the projection of the bearing part only: H has one 2x3 block.
+  const VecX Rdiag = VecX::Constant(2, sigmaPx * sigmaPx);
+  const VecX x0 = s.x;
+  VecX xi = x0;
+  bayes::CSparseJacobian H(2, 7);
+  VecX nu(2);
   for (int it = 0; it < std::max(1, iterations); ++it)
   {
+    Vec2 h;
     Mat27 Hi;
     if (!shadowMeasurement(cam, xi, h, &Hi))
     {
       if (it == 0) return false;
-      break;  // keep the previous iterate and its gain
+      break;  // keep the previous linearization point
     }
-    H = Hi;
-    Mat2 S = H * s.P * H.transpose() + R;
-    Eigen::LLT<Mat2> llt(S);
-    if (llt.info() != Eigen::Success) return false;
-    K = s.P * H.transpose() * llt.solve(Mat2::Identity());
-    const Vec2 nu = z - h - H * (x0 - xi);  // iterated EKF (Gauss-Newton); = z - h(x0) at it = 0
-    if (it == 0 && nis) *nis = nu.dot(llt.solve(nu));
-    xi = x0 + K * nu;
+    H.resize(2, 7);
+    H.addBlock(0, 0, Hi.leftCols<3>());
+    nu = z - h - Hi * (x0 - xi);  // iterated EKF (Gauss-Newton); = z - h(x0) at it = 0
+    if (it + 1 < std::max(1, iterations))
+    {
+      VecX next = x0;  // the mean of this linearization, x0 + K_i nu_i
+      const bayes::TUpdateResult r = bayes::ekfLogLikelihood(s.P, H, nu, Rdiag, &next);
+      if (!r.ok) return false;
+      if (it == 0 && nis) *nis = r.nis;
+      xi = next;
+    }
   }
-  // Covariance at the last linearization point (Joseph form).
-  const Mat7 IKH = Mat7::Identity() - K * H;
-  s.P = IKH * s.P * IKH.transpose() + K * R * K.transpose();
-  s.x = xi;
+  // Mean and covariance at the last linearization point: x = x0 + K nu, P = P - K S K^T.
+  VecX x = x0;
+  MatX P = s.P;
+  const bayes::TUpdateResult r = bayes::ekfUpdate(x, P, H, nu, Rdiag);
+  if (!r.ok) return false;
+  if (iterations <= 1 && nis) *nis = r.nis;
+  s.x = x;
+  s.P = P;
   applyGauge(s);
   return s.x.allFinite() && s.P.allFinite();
 }

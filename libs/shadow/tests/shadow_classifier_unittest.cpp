@@ -173,7 +173,7 @@ void runSequence(Rng& rng, const CShadowFilter::TOptions& opts, int nStatic, int
     }
     if (k == 0)
     {
-      const auto ids = filter.addFeatures(cv::Mat(), newUv);
+      const auto ids = filter.addFeatures(newUv);
       for (size_t i = 0; i < ids.size(); ++i)
       {
         pts[i].id = ids[i];

@@ -101,7 +101,7 @@ void runFig3(Rng& rng, const CShadowFilter::TOptions& opts, double incrementSigm
     if (k == 0)
     {
       filter.processMeasurements(m, {});
-      id = filter.addFeatures(cv::Mat(), {uv})[0];
+      id = filter.addFeatures({uv})[0];
       ASSERT_GE(id, 0);
     }
     else

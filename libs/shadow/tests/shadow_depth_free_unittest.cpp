@@ -230,7 +230,7 @@ TEST(DepthFree, StillCameraDecidesMoversDynamicAndPromotesStillPointsAsRaysOfUnk
     {
       std::vector<Vec2> all = still;
       all.insert(all.end(), moving.begin(), moving.end());
-      ids = sf.addFeatures(cv::Mat(), all);
+      ids = sf.addFeatures(all);
       ASSERT_EQ(ids.size(), 20u);
     }
   }

@@ -197,18 +197,16 @@ TFeatureWorldEstimate CImmSlamFilter::featureWorldEstimate(const TFeature& f) co
   yc[5] = std::max(yc[5], 1e-3);
   features::inverseDepthToPoint(yc, &J_p);
   e.cov_W = R_WC * J_p * Pff * J_p.transpose() * R_WC.transpose();
-  e.anchor_W = R_WC * y.head<3>() + m_rWC;
-  // Chain rule: (theta, phi)_W = angles(R_WC m(theta, phi)_C); rho unchanged.
-  Mat32 J_m;
-  const Vec3 mC = math::Bearing::DirectionFromAngles(y[3], y[4], &J_m);
-  Mat23 J_ang;
-  const Vec2 angW = math::Bearing::AzimuthElevation(R_WC * mC, &J_ang);
-  e.theta = angW[0];
-  e.phi = angW[1];
+  // W is the camera frame after the motion dq = q_CW, t = -R_CW r_WC (features::transformInverseDepth,
+  // which owns the Jacobian of the angles' rotation); rho is unchanged.
+  const Vec4 qCW = math::quatConjugate(m_qWC);
+  Mat6 J_y;
+  const Vec6 yW = features::transformInverseDepth(y, qCW, -math::quatRotate(qCW, m_rWC), &J_y);
+  e.anchor_W = yW.head<3>();
+  e.theta = yW[3];
+  e.phi = yW[4];
   e.rho = y[5];
-  Mat3 T = Mat3::Zero();
-  T.topLeftCorner<2, 2>() = J_ang * R_WC * J_m;
-  T(2, 2) = 1;
+  const Mat3 T = J_y.bottomRightCorner<3, 3>();
   e.cov_tpr = T * Pff.bottomRightCorner<3, 3>() * T.transpose();
   return e;
 }

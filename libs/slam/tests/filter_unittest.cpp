@@ -7,7 +7,10 @@
 #endif
 
 #include <immslam/camera/CCameraModel.h>
-#include <immslam/slam/CSlamTracker.h>
+#include <immslam/math/bearing.h>
+#include <immslam/math/numerical_jacobian.h>
+#include <immslam/math/quaternion.h>
+#include <immslam/tracking/CSlamTracker.h>
 
 #include <Eigen/LU>
 #include <gtest/gtest.h>
@@ -128,4 +131,51 @@ TEST(ImmSlamFilter, TrackerKnownAssociationStepIsTheFilterStepBitForBit)
     ASSERT_TRUE(tracker.fusedMean() == filter.fusedMean()) << "frame " << k;
     ASSERT_TRUE(tracker.modelProbabilities() == filter.modelProbabilities()) << "frame " << k;
   }
+}
+
+TEST(ImmSlamFilter, FeatureWorldEstimateMatchesNumericalJacobians)
+{
+  // A rotated and displaced camera (relocalisation's pose correction), then the features' world view:
+  // the anchor and angles give the fused position, and Cov(theta, phi, rho)_W is J P J^T with J the
+  // numerical Jacobian of the angles' rotation into W.
+  const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
+  CImmSlamFilter::TOptions o;
+  o.num_threads = 1;
+  CImmSlamFilter filter(o, TIMMBankOptions(), cam);
+  TStillScene scene;
+  filter.beginFrame();
+  filter.start(0.0);
+  std::vector<CImmSlamFilter::TNewFeature> fresh;
+  for (const Vec2& uv : scene.uv0) fresh.push_back({uv, 0.5, 0.2, filter.allocateId()});
+  const auto ids = filter.addFeatures(fresh);
+  filter.beginFrame();
+  filter.predict(1 / 30.0);
+  const Vec4 q_CW = math::quatFromRotationVector(Vec3(0.3, -0.5, 0.2));
+  filter.correctPose(Vec3(0.4, -0.1, 0.7), q_CW, 0.01, 0.01, Vec6::Zero(), 1e-4 * Mat6::Identity());
+  filter.finishUpdate();
+  ASSERT_EQ(ids.size(), scene.uv0.size());
+  const Vec3 r_WC = filter.cameraPosition();
+  const Vec4 q_WC = filter.cameraOrientation();
+  ASSERT_GT(r_WC.norm(), 0.1);
+  int checked = 0;
+  for (const auto& f : filter.features())
+  {
+    const TFeatureWorldEstimate e = filter.featureWorldEstimate(f);
+    ASSERT_TRUE(e.inverseDepth);
+    const Vec3 p = e.anchor_W + math::Bearing::DirectionFromAngles(e.theta, e.phi) / e.rho;
+    EXPECT_LT((p - e.p_W).norm(), 1e-9 * (1 + e.p_W.norm()));
+    const VecX y = filter.fusedMean().segment(f.offset, 6);
+    const auto worldAngles = [&](const VecX& tpr) -> VecX
+    {
+      const Vec3 mW = math::quatRotate(q_WC, math::Bearing::DirectionFromAngles(tpr[0], tpr[1]));
+      const Vec2 a = math::Bearing::AzimuthElevation(mW);
+      return Vec3(a[0], a[1], tpr[2]);
+    };
+    const MatX J = math::numericalJacobian(worldAngles, VecX(y.tail<3>()));
+    const Mat3 Pa = filter.fusedCovarianceBlock(f.offset + 3, 3);
+    const Mat3 expected = J * Pa * J.transpose();
+    EXPECT_LT((e.cov_tpr - expected).cwiseAbs().maxCoeff(), 1e-6 * expected.cwiseAbs().maxCoeff());
+    ++checked;
+  }
+  EXPECT_EQ(checked, static_cast<int>(scene.uv0.size()));
 }

@@ -13,7 +13,7 @@
  *    epipolar line (depth unknown) is rescued; one 8 px off that line is rejected; the others are
  *    low-innovation inliers. */
 #include <gtest/gtest.h>
-#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/tracking/CMonoSlamIMM.h>
 #include <immslam/slam/COnePointRansac.h>
 #include <immslam/slam/measurement.h>
 

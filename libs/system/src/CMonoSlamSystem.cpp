@@ -146,7 +146,7 @@ CMonoSlamSystem::CMonoSlamSystem(const mrpt::config::CConfigFileBase& cfg, camer
   m_pendingWeight = TOptions::parsePendingWeight(m_opts.pending_weight, "system");
   m_slam = std::make_unique<slam::CMonoSlamIMM>(m_slamOpts, m_bankOpts, m_ransacOpts, cam);
   if (m_opts.shadow_filter)
-    m_shadow = std::make_unique<shadow::CShadowFilter>(m_shadowOpts, cam, [this] { return m_slam->allocateId(); });
+    m_shadow = std::make_unique<shadow::CShadowTracker>(m_shadowOpts, cam, [this] { return m_slam->allocateId(); });
 }
 
 CMonoSlamSystem::~CMonoSlamSystem() = default;

@@ -5,7 +5,7 @@
 #include <immslam/app/CLiveView.h>
 #include <immslam/app/app_options.h>
 #include <immslam/eval/ate.h>
-#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/tracking/CMonoSlamIMM.h>
 #include <immslam/system/CMonoSlamSystem.h>
 #include <immslam/viz/COverlayWriter.h>
 #include <immslam/viz/scene.h>

@@ -88,12 +88,4 @@ struct TMotionIncrement
 
 /** The increment of model m over dt frames from the velocities (v, w) in the camera frame. */
 TMotionIncrement motionIncrement(const TMotionModel& m, const Vec3& v, const Vec3& w, double dt, double focalPx);
-
-/** World-centred form of the same models (used to simulate ground truth and in tests):
- * camera-state prediction \f$ x_v' = f(x_v, n) \f$ of a model over dt frames, with
- * \param F the transition Jacobian df/dx_v (13x13), \param Q the process noise covariance
- * \f$ G\,\mathrm{diag}(\sigma_a^2 dt^2 I, \sigma_\alpha^2 dt^2 I)\,G^\top \f$ (G = df/d(V, W)), in state
- * units (requires focalPx). The quaternion is normalized after the product (its Jacobian included in F). */
-Vec13 predictCamera(const TMotionModel& m, const Vec13& xv, double dt, double focalPx,
-                    Mat13* F = nullptr, Mat13* Q = nullptr);
 }  // namespace immslam::motion

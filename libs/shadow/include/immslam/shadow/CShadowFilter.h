@@ -5,25 +5,24 @@
  *
  * Per frame the SLAM filter gives the camera pose and its motion since the previous frame
  * (TCameraMotion); the shadow filter
- *  1. predicts every feature's EKF with the camera increment (eq. 2, feature_ekf.h),
- *  2. searches it in the image inside its own 95 % innovation ellipse with its patch warped to the
- *     predicted appearance (frontend::searchInEllipse, frontend::patchWarp),
- *  3. updates the EKF with the match (eqs. 3-5),
- *  4. classifies the pending features (Sec. III-A, eqs. 6-14, CRayClassifier),
- *  5. reports decisions, promotions (removed from the shadow filter), dynamic tracks in W, and drops
- *     pending features that time out or are lost and dynamic ones lost for too long.
- * New features are added by the caller after processFrame (addFeatures), at pixels of the frame just
- * processed. Estimator library: no GUI, no file output. */
+ *  1. predicts every feature's EKF with the camera increment (eq. 2, feature_ekf.h): predict(),
+ *     which also gives each feature's predicted pixel and 95 % innovation ellipse;
+ *  2. takes the frame's associations (searched, found at a pixel) and updates each found feature's
+ *     EKF (eqs. 3-5): update(). The image search is the caller's (tracking::CShadowTracker searches
+ *     with the features' patches; processMeasurements() takes known associations);
+ *  3. classifies the pending features (Sec. III-A, eqs. 6-14, CRayClassifier) and
+ *  4. reports decisions, promotions (removed from the shadow filter), dynamic tracks in W, and drops
+ *     pending features that time out or are lost and dynamic ones lost for too long: finishFrame().
+ * New features are added by the caller after the frame (addFeatures), at pixels of the frame just
+ * processed. Estimator library: no image, no OpenCV, no front end, no GUI, no file output. */
 #pragma once
 
 #include <immslam/camera/CCameraModel.h>
-#include <immslam/frontend/frontend.h>
 #include <immslam/shadow/CRayClassifier.h>
 #include <immslam/shadow/feature_ekf.h>
 #include <immslam/shadow/shadow_types.h>
 
 #include <mrpt/config/CLoadableOptions.h>
-#include <opencv2/core/mat.hpp>
 
 #include <chrono>
 #include <cstdint>
@@ -40,7 +39,6 @@ struct TShadowFeature
   EShadowClass cls = EShadowClass::Pending;  ///< Pending or Dynamic
   TShadowState ekf;                          ///< eqs. (1)-(5)
   TRayTrack track;                           ///< views for the classifier (relative poses in C0)
-  frontend::CFeaturePatch patch;             ///< appearance at the first observation (may be invalid)
   std::int64_t firstFrame = 0;
   int missed = 0;                            ///< consecutive frames without a match
   int nMeasured = 0;                         ///< frames with a match (the first observation included)
@@ -48,6 +46,14 @@ struct TShadowFeature
   Mat2 S = Mat2::Identity();                 ///< innovation covariance of this frame
   Vec2 uv = Vec2::Zero();                    ///< last measured pixel
   bool searched = false, measured = false;   ///< in this frame
+};
+
+/** One feature's association in a frame (CShadowFilter::update): searched for, and found at uv or not. */
+struct TShadowMatch
+{
+  std::int64_t id = -1;
+  bool found = false;
+  Vec2 uv = Vec2::Zero();  ///< the measured pixel (when found)
 };
 
 /** The shadow filter (see the file comment; README.md in libs/shadow for the formulation and the
@@ -67,7 +73,7 @@ class CShadowFilter
     double init_velocity_std_px = 5.0;   ///< velocity prior std (px/frame at unit depth)
     double sigma_accel_px = 0.5;         ///< acceleration noise (px/frame^2 at unit depth)
     int ekf_iterations = 1;              ///< 1: EKF; > 1: iterated EKF update
-    // -- Active search (frontend)
+    // -- Active search (the image side: CShadowTracker in libs/tracking)
     int patch_half_size = 5;             ///< 11x11 templates
     bool warp_patches = true;            ///< predict the patch appearance (affine warp)
     double min_ncc = 0.8;                ///< correlation threshold of a match
@@ -107,26 +113,28 @@ class CShadowFilter
    * options.id_offset. \throws std::runtime_error on a null camera or invalid options. */
   CShadowFilter(const TOptions& opts, camera::CCameraModel::Ptr cam, IdAllocator ids = {});
 
-  /** One frame with images: prediction (eq. 2), active search of every feature in its innovation
-   * ellipse, update (eqs. 3-5), classification (Sec. III-A), drops. \param grey CV_8UC1, the
-   * camera's size. \param excluded optional CV_8UC1 mask of the same size, non-zero where no match is
-   * accepted (within patch_half_size; CMonoSlamIMM::setExclusionMask). The report stays valid until
-   * the next call. */
-  const TShadowReport& processFrame(const TCameraMotion& motion, const cv::Mat& grey,
-                                    const cv::Mat& excluded = cv::Mat());
+  /** Begins a frame: prediction (eq. 2) of every feature with the camera motion, its predicted pixel
+   * and innovation covariance (TShadowFeature::predicted, S: the search region).
+   * \throws std::runtime_error on an invalid motion. */
+  void predict(const TCameraMotion& motion);
+  /** The frame's associations: each match marks its feature searched and, when found, updates its
+   * EKF with the pixel (eqs. 3-5). One measurement per feature and frame (later ones ignored);
+   * unknown ids are ignored. Features not in `matches` count as not searched. */
+  void update(const std::vector<TShadowMatch>& matches);
+  /** Ends the frame: classification (Sec. III-A), drops, the report. \param searchMs the caller's
+   * association time, reported as tSearchMs. The report stays valid until the next frame. */
+  const TShadowReport& finishFrame(double searchMs = 0);
 
-  /** The same step with known data association and no image (measurement-level simulations,
-   * callers with their own front end): z holds (feature id, measured pixel); features absent from
-   * z count as missed; unknown ids are ignored. */
+  /** One frame with known data association (measurement-level simulations, callers with their own
+   * front end): predict(), update() with z (feature id, measured pixel; non-finite pixels ignored),
+   * finishFrame(). Features absent from z count as missed; unknown ids are ignored. */
   const TShadowReport& processMeasurements(const TCameraMotion& motion,
                                            const std::vector<std::pair<std::int64_t, Vec2>>& z);
 
-  /** New features observed at pixels uv of the frame just processed (call after processFrame /
-   * processMeasurements of that frame; before the first frame the camera is taken as W's origin).
-   * With a non-empty grey their patches are extracted there (-1 returned where it does not fit);
-   * an empty grey stores no patch (processMeasurements only). Returns the ids (-1: refused, e.g.
-   * max_features reached or not unprojectable). */
-  std::vector<std::int64_t> addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv);
+  /** New features observed at pixels uv of the frame just processed (call after that frame's
+   * finishFrame; before the first frame the camera is taken as W's origin). Returns the ids (-1:
+   * refused, e.g. max_features reached or not a finite pixel). */
+  std::vector<std::int64_t> addFeatures(const std::vector<Vec2>& uv);
 
   /** Measured or predicted pixels of all held features (to keep new detections away). */
   std::vector<Vec2> occupiedPixels() const;
@@ -167,7 +175,6 @@ class CShadowFilter
  private:
   void beginFrame(const TCameraMotion& motion);
   void predictAll(const TCameraMotion& motion);
-  void searchAll(const cv::Mat& grey, const cv::Mat& excluded);
   void updateFeature(TShadowFeature& f, const Vec2& z);
   void classifyAndManage();
   void endFrame();
@@ -182,9 +189,6 @@ class CShadowFilter
   TCameraMotion m_motion;  ///< the current frame's motion
   bool m_started = false;
   TShadowReport m_report;
-  frontend::TSearchParams m_search;
-  frontend::TSearchWorkspace m_ws;
-  cv::Mat m_templ;
   double m_sigmaV = 0, m_sigmaA = 0;  ///< in length units per frame (per frame^2)
   std::chrono::steady_clock::time_point m_t0;  ///< start of the current frame
 };

@@ -64,7 +64,7 @@ TShadowState initialiseShadowState(const camera::CCameraModel& cam, const Vec2& 
  * \f[ \mathbf h'_{xyz} = R^\top\big(\mathbf h_{xyz} + (\mathbf u + w\mathbf V)\,dt - w\,\mathbf t\big),\quad
  *     w' = w,\quad \mathbf u' = R^\top(\mathbf u + w\mathbf V), \f]
  * linear in the state (a point at infinity, w = 0, only rotates). \f$ \mathbf V \f$ is the velocity
- * impulse of an acceleration noise (as motion::predictCamera). Not gauge-normalized.
+ * impulse of an acceleration noise (as the motion models do). Not gauge-normalized.
  * \param J_x   d x'/d x (7x7);
  * \param J_inc d x'/d [dt; dtheta] of the increment's perturbation (7x6):
  *              \f$ \partial\mathbf h'_{xyz}/\partial\delta t = -w R^\top \f$,
@@ -90,8 +90,8 @@ Vec7 normalizeGauge(const Vec7& x, Mat7* J = nullptr);
 void predictShadowState(TShadowState& s, double dt, const Vec3& t, const Vec4& dq, const Mat6& cov_increment,
                         double sigmaAccel);
 
-/** EKF update with one pixel measurement (iterated: `iterations` Gauss-Newton relinearizations,
- * 1 = the plain EKF), Joseph form, then normalizeGauge().
+/** EKF update with one pixel measurement (eqs. 3-5; iterated: `iterations` Gauss-Newton
+ * relinearizations, 1 = the plain EKF) by bayes::ekfUpdate, then normalizeGauge().
  * \param nis optional output: the normalized innovation squared at the prior.
  * \return false (state unchanged) if the prediction is not projectable or S is not PD. */
 bool updateShadowState(TShadowState& s, const camera::CCameraModel& cam, const Vec2& z, double sigmaPx,

@@ -6,8 +6,8 @@
 #pragma once
 
 #include <immslam/camera/CCameraModel.h>
-#include <immslam/shadow/CShadowFilter.h>
-#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/tracking/CShadowTracker.h>
+#include <immslam/tracking/CMonoSlamIMM.h>
 
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/config/CLoadableOptions.h>
@@ -130,7 +130,7 @@ class CMonoSlamSystem
   const slam::CMonoSlamIMM& slam() const { return *m_slam; }
   slam::CMonoSlamIMM& slam() { return *m_slam; }
   /** The shadow filter, or null when off. */
-  const shadow::CShadowFilter* shadowFilter() const { return m_shadow.get(); }
+  const shadow::CShadowFilter* shadowFilter() const { return m_shadow ? &m_shadow->filter() : nullptr; }
   const TOptions& options() const { return m_opts; }
   /** The weight of a pending shadow feature in the count of features in view now: [system]
    * pending_weight, or with "auto" (1 + b) / (2 + n), b and n the pending features that ended in SLAM
@@ -171,7 +171,7 @@ class CMonoSlamSystem
   slam::COnePointRansac::TOptions m_ransacOpts;
   shadow::CShadowFilter::TOptions m_shadowOpts;
   std::unique_ptr<slam::CMonoSlamIMM> m_slam;
-  std::unique_ptr<shadow::CShadowFilter> m_shadow;
+  std::unique_ptr<shadow::CShadowTracker> m_shadow;
   TSystemFrame m_frame;
   double m_pendingWeight = 1.0;        ///< fixed [system] pending_weight (< 0: auto)
   double m_becameSlam = 0, m_left = 0; ///< decayed counts of pending features that left the shadow filter

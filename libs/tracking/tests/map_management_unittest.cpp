@@ -12,7 +12,7 @@
  *    are invariant to a rigid motion). With linearity_threshold = 0.1, sigma_rho / rho = 0.0245 (L =
  *    0.098) converts at the next step and 0.0255 (L = 0.102) does not, at rho = 1 and at rho = 2. */
 #include <gtest/gtest.h>
-#include <immslam/slam/CMonoSlamIMM.h>
+#include <immslam/tracking/CMonoSlamIMM.h>
 #include <immslam/slam/measurement.h>
 
 #include <algorithm>

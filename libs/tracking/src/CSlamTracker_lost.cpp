@@ -2,8 +2,8 @@
  * the map (relocalise.h: the map's templates at the image's corners, RANSAC PnP), whose pose the
  * filter takes (CImmSlamFilter::correctPose). */
 #include <immslam/math/quaternion.h>
-#include <immslam/slam/CSlamTracker.h>
-#include <immslam/slam/relocalise.h>
+#include <immslam/tracking/CSlamTracker.h>
+#include <immslam/tracking/relocalise.h>
 
 #include <algorithm>
 #include <cmath>

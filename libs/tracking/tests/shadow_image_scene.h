@@ -9,7 +9,7 @@
 
 #include <cmath>
 
-#include "shadow_test_utils.h"
+#include "../../shadow/tests/shadow_test_utils.h"
 
 namespace immslam::shadow::test
 {

@@ -1,7 +1,7 @@
 /* imm-monoslam — relocalisation: map templates matched at the image's corners, RANSAC PnP. */
 #include <immslam/frontend/frontend.h>
 #include <immslam/math/quaternion.h>
-#include <immslam/slam/relocalise.h>
+#include <immslam/tracking/relocalise.h>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>

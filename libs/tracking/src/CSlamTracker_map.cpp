@@ -1,7 +1,7 @@
 /* imm-monoslam — the SLAM tracker's map policy: new features with their templates, the bounded map,
  * the deletion rule and the inverse depth -> XYZ conversion (paper Sec. IV-2), carried out by the
  * filter on every mode. */
-#include <immslam/slam/CSlamTracker.h>
+#include <immslam/tracking/CSlamTracker.h>
 
 #include <algorithm>
 #include <unordered_set>

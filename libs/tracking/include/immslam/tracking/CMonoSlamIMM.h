@@ -5,7 +5,7 @@
 #pragma once
 
 #include <immslam/slam/CImmSlamFilter.h>
-#include <immslam/slam/CSlamTracker.h>
+#include <immslam/tracking/CSlamTracker.h>
 #include <immslam/slam/TFeatureWorldEstimate.h>
 #include <immslam/slam/TFrameReport.h>
 #include <immslam/slam/TIMMBankOptions.h>

@@ -1,7 +1,7 @@
 /* imm-monoslam — the SLAM tracker's frame: associate (search in the image, or given matches), then
  * update (1-point RANSAC, the filter's updates, rescue, probabilities), then the map policy. */
 #include <immslam/math/chi2.h>
-#include <immslam/slam/CSlamTracker.h>
+#include <immslam/tracking/CSlamTracker.h>
 
 #include <opencv2/core.hpp>
 #include <numeric>

@@ -1,10 +1,10 @@
-/* Tests: the shadow filter on images — a short rendered sequence (a textured background plane and a
- * textured square moving in front of it, seen by a hand-held camera): features are tracked by the
- * filter's own active search and those on the moving square are classified dynamic. (The per-frame
+/* Tests: the shadow filter on images (CShadowTracker) — a short rendered sequence (a textured
+ * background plane and a textured square moving in front of it, seen by a hand-held camera): features
+ * are tracked by the tracker's active search and those on the moving square are classified dynamic. (The per-frame
  * cost on the same scene is a benchmark: tests/benchmarks/bench_shadow.) */
 #include <gtest/gtest.h>
 #include <immslam/frontend/frontend.h>
-#include <immslam/shadow/CShadowFilter.h>
+#include <immslam/tracking/CShadowTracker.h>
 
 #include <algorithm>
 #include <map>
@@ -40,7 +40,7 @@ TEST(ShadowImage, TracksAndClassifiesAMovingSquare)
 {
   const TScene scene;
   CShadowFilter::TOptions opts;
-  CShadowFilter filter(opts, scene.cam);
+  CShadowTracker filter(opts, scene.cam);
   frontend::TDetectorParams det;
   det.gridCols = 10;
   det.gridRows = 8;
@@ -104,4 +104,62 @@ TEST(ShadowImage, TracksAndClassifiesAMovingSquare)
   EXPECT_GE(double(measured) / searched, 0.907);  // failed searches 7.7 % -> at most 9.3 %
   EXPECT_LE(timedOut, 5);
   EXPECT_LE(lost, 42);
+}
+
+TEST(ShadowImage, ImageStepIsTheFilterStepWithTheSearchedMatches)
+{
+  // The image path ends in the filter's update with given matches: the tracker's frame equals
+  // predict / update(its associations) / finishFrame on a second filter, bit for bit.
+  const TScene scene;
+  CShadowFilter::TOptions opts;
+  CShadowTracker tracker(opts, scene.cam);
+  CShadowFilter twin(opts, scene.cam);
+  frontend::TDetectorParams det;
+  int compared = 0;
+  for (int k = 0; k < 30; ++k)
+  {
+    const cv::Mat grey = scene.render(k);
+    const TShadowReport& rep = tracker.processFrame(scene.motion(k), grey);
+    std::vector<TShadowMatch> matches;
+    for (const auto& v : rep.views)
+      if (v.searched) matches.push_back({v.id, v.measured, v.uv});
+    twin.predict(scene.motion(k));
+    twin.update(matches);
+    const TShadowReport& trep = twin.finishFrame();
+    ASSERT_EQ(trep.views.size(), rep.views.size());
+    for (std::size_t i = 0; i < rep.views.size(); ++i)
+    {
+      EXPECT_EQ(trep.views[i].id, rep.views[i].id);
+      EXPECT_EQ(trep.views[i].uv, rep.views[i].uv);
+      EXPECT_EQ(trep.views[i].S, rep.views[i].S);
+      ++compared;
+    }
+    if (tracker.size() < 20)
+    {
+      std::vector<Vec2> uv;
+      for (const auto& c : frontend::detectInEmptyCells(grey, tracker.occupiedPixels(), 20, det)) uv.push_back(c.uv);
+      const auto ids = tracker.addFeatures(grey, uv);
+      std::vector<Vec2> kept;
+      for (std::size_t i = 0; i < ids.size(); ++i)
+        if (ids[i] >= 0) kept.push_back(uv[i]);
+      twin.addFeatures(kept);
+    }
+  }
+  EXPECT_GT(compared, 100);
+}
+
+TEST(ShadowImage, BadImagesAndFeaturesWithoutPatches)
+{
+  const TScene scene;
+  CShadowTracker tracker(CShadowFilter::TOptions(), scene.cam);
+  EXPECT_THROW(tracker.processFrame(scene.motion(0), cv::Mat()), std::runtime_error);
+  EXPECT_THROW(tracker.addFeatures(cv::Mat(3, 3, CV_8UC1), {Vec2(10, 10)}), std::runtime_error);
+  // Added without an image: held by the filter, never searched in an image.
+  const auto ids = tracker.addFeatures(cv::Mat(), {Vec2(100, 80), Vec2(150, 90)});
+  ASSERT_EQ(ids.size(), 2u);
+  EXPECT_GE(ids[0], 0);
+  EXPECT_EQ(tracker.patchOf(ids[0]), nullptr);
+  const TShadowReport& rep = tracker.processFrame(scene.motion(1), scene.render(1));
+  EXPECT_EQ(rep.nSearched, 0);
+  EXPECT_EQ(tracker.size(), 2u);
 }

@@ -3,7 +3,7 @@
 #include <immslam/math/chi2.h>
 #include <immslam/math/parallel.h>
 #include <immslam/math/quaternion.h>
-#include <immslam/slam/CSlamTracker.h>
+#include <immslam/tracking/CSlamTracker.h>
 #include <immslam/slam/measurement.h>
 
 #include <Eigen/Cholesky>
