@@ -39,13 +39,13 @@ void TRayTrack::start(std::int64_t frame_, const Vec2& uv)
 }
 
 void TRayTrack::advance(std::int64_t frame_, double dt, const Vec3& t, const Vec4& dq, const Mat6& cov,
-                        double covScale, double pNotTranslating)
+                        double pNotTranslating)
 {
   notTranslating = std::min(notTranslating, std::clamp(pNotTranslating, 0.0, 1.0));
   TUncertainPose inc;
   inc.t = t;
   inc.q = dq;
-  inc.cov = covScale * cov;
+  inc.cov = cov;
   T_0k = composePoses(T_0k, inc);
   elapsed += dt;
   frame = frame_;

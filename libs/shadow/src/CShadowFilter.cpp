@@ -31,7 +31,7 @@ CShadowFilter::CShadowFilter(const TOptions& opts, camera::CCameraModel::Ptr cam
       m_classifier(m_opts.classifierParams(), m_cam),
       m_ids(std::move(ids))
 {
-  m_nextId = static_cast<std::int64_t>(m_opts.id_offset);
+  m_nextId = kFirstOwnId;
   const double f = m_cam->fx();
   m_sigmaV = m_opts.init_velocity_std_px / f;
   m_sigmaA = m_opts.sigma_accel_px / f;
@@ -113,8 +113,7 @@ void CShadowFilter::predictAll(const TCameraMotion& motion)
   for (auto& f : m_features)
   {
     predictShadowState(f.ekf, motion.dt, motion.t, m_motion.dq, covInc, m_sigmaA);
-    f.track.advance(motion.frame, motion.dt, motion.t, m_motion.dq, covInc, m_opts.increment_cov_scale,
-                    motion.pNotTranslating);
+    f.track.advance(motion.frame, motion.dt, motion.t, m_motion.dq, covInc, motion.pNotTranslating);
     f.searched = f.measured = false;
     if (!shadowInnovation(f.ekf, *m_cam, m_opts.sigma_pixel, f.predicted, f.S))
     {
@@ -127,7 +126,7 @@ void CShadowFilter::predictAll(const TCameraMotion& motion)
 
 void CShadowFilter::updateFeature(TShadowFeature& f, const Vec2& z)
 {
-  if (!updateShadowState(f.ekf, *m_cam, z, m_opts.sigma_pixel, m_opts.ekf_iterations)) return;
+  if (!updateShadowState(f.ekf, *m_cam, z, m_opts.sigma_pixel)) return;
   f.uv = z;
   f.measured = true;
   f.missed = 0;

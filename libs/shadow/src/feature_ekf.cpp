@@ -128,42 +128,21 @@ bool shadowInnovation(const TShadowState& s, const camera::CCameraModel& cam, do
 }
 
 bool updateShadowState(TShadowState& s, const camera::CCameraModel& cam, const Vec2& z, double sigmaPx,
-                       int iterations, double* nis)
+                       double* nis)
 {
   // The covariance algebra is bayes::ekfUpdate's (S = H P H^T + R, x += K nu, P -= K S K^T);
   // h(x) is the projection of the bearing part only: H has one 2x3 block.
-  const VecX Rdiag = VecX::Constant(2, sigmaPx * sigmaPx);
-  const VecX x0 = s.x;
-  VecX xi = x0;
+  Vec2 h;
+  Mat27 Hx;
+  if (!shadowMeasurement(cam, s.x, h, &Hx)) return false;
   bayes::CSparseJacobian H(2, 7);
-  VecX nu(2);
-  for (int it = 0; it < std::max(1, iterations); ++it)
-  {
-    Vec2 h;
-    Mat27 Hi;
-    if (!shadowMeasurement(cam, xi, h, &Hi))
-    {
-      if (it == 0) return false;
-      break;  // keep the previous linearization point
-    }
-    H.resize(2, 7);
-    H.addBlock(0, 0, Hi.leftCols<3>());
-    nu = z - h - Hi * (x0 - xi);  // iterated EKF (Gauss-Newton); = z - h(x0) at it = 0
-    if (it + 1 < std::max(1, iterations))
-    {
-      VecX next = x0;  // the mean of this linearization, x0 + K_i nu_i
-      const bayes::TUpdateResult r = bayes::ekfLogLikelihood(s.P, H, nu, Rdiag, &next);
-      if (!r.ok) return false;
-      if (it == 0 && nis) *nis = r.nis;
-      xi = next;
-    }
-  }
-  // Mean and covariance at the last linearization point: x = x0 + K nu, P = P - K S K^T.
-  VecX x = x0;
+  H.addBlock(0, 0, Hx.leftCols<3>());
+  const VecX nu = z - h;
+  VecX x = s.x;
   MatX P = s.P;
-  const bayes::TUpdateResult r = bayes::ekfUpdate(x, P, H, nu, Rdiag);
+  const bayes::TUpdateResult r = bayes::ekfUpdate(x, P, H, nu, VecX::Constant(2, sigmaPx * sigmaPx));
   if (!r.ok) return false;
-  if (iterations <= 1 && nis) *nis = r.nis;
+  if (nis) *nis = r.nis;
   s.x = x;
   s.P = P;
   applyGauge(s);

@@ -50,7 +50,6 @@ void CShadowFilter::TOptions::validate(const std::string& s) const
   core::requirePositive(init_rho_std, s, "init_rho_std");
   core::requireNonNegative(init_velocity_std_px, s, "init_velocity_std_px");
   core::requireNonNegative(sigma_accel_px, s, "sigma_accel_px");
-  core::requireInRange(ekf_iterations, 1, 20, s, "ekf_iterations");
   core::requireInRange(patch_half_size, 1, 50, s, "patch_half_size");
   core::requireInRange(min_ncc, -1, 1, s, "min_ncc");
   core::requireInRange(search_probability, 0.5, 0.999999, s, "search_probability");
@@ -63,12 +62,10 @@ void CShadowFilter::TOptions::validate(const std::string& s) const
   core::requireInRange(static_min_frames, 2, 1000000, s, "static_min_frames");
   core::requirePositive(static_min_velocity_px, s, "static_min_velocity_px");
   core::requireInRange(static_power, 0.5, 0.999999, s, "static_power");
-  core::requirePositive(increment_cov_scale, s, "increment_cov_scale");
   core::requireInRange(max_pending_frames, 3, 1000000, s, "max_pending_frames");
   core::requireInRange(max_missed_frames, 0, 1000000, s, "max_missed_frames");
   core::requireInRange(dynamic_max_missed_frames, 0, 1000000, s, "dynamic_max_missed_frames");
   core::requireInRange(max_features, 1, 1000000, s, "max_features");
-  core::requireInRange(id_offset, 0, 4e18, s, "id_offset");
   core::requirePositive(min_inverse_distance, s, "min_inverse_distance");
 }
 

@@ -43,8 +43,8 @@ struct TRayTrack
   /** Starts the track at its first observation. */
   void start(std::int64_t frame, const Vec2& uv);
   /** One frame later: \f$ T_{0k} \leftarrow T_{0k}\,T_{k-1,k} \f$ (composePoses) with the increment
-   * (t, dq) and its covariance times covScale; pNotTranslating as TCameraMotion's. */
-  void advance(std::int64_t frame, double dt, const Vec3& t, const Vec4& dq, const Mat6& cov, double covScale = 1,
+   * (t, dq) and its covariance; pNotTranslating as TCameraMotion's. */
+  void advance(std::int64_t frame, double dt, const Vec3& t, const Vec4& dq, const Mat6& cov,
                double pNotTranslating = 0);
   /** Records the current frame's measurement as a view (at the current T_0k). */
   void addView(const Vec2& uv);

@@ -72,7 +72,6 @@ class CShadowFilter
     double init_rho_std = 1.0;           ///< prior std of w (its 95 % region includes 0 = infinity)
     double init_velocity_std_px = 5.0;   ///< velocity prior std (px/frame at unit depth)
     double sigma_accel_px = 0.5;         ///< acceleration noise (px/frame^2 at unit depth)
-    int ekf_iterations = 1;              ///< 1: EKF; > 1: iterated EKF update
     // -- Active search (the image side: CShadowTracker in libs/tracking)
     int patch_half_size = 5;             ///< 11x11 templates
     bool warp_patches = true;            ///< predict the patch appearance (affine warp)
@@ -89,13 +88,11 @@ class CShadowFilter
     double static_min_velocity_px = 1.0; ///< ... and power against this speed (px/frame at the point's distance)
     double static_power = 0.95;          ///< ... with this detection probability
     bool static_power_worst_case = true; ///< ... in every direction (else on average over directions)
-    double increment_cov_scale = 1.0;    ///< inflation of the SLAM increments' covariance
     // -- Management
     int max_pending_frames = 150;        ///< undecided features are dropped after this many frames
     int max_missed_frames = 5;           ///< pending features dropped after this many misses in a row
     int dynamic_max_missed_frames = 10;  ///< dynamic features dropped after this many misses in a row
     int max_features = 100;              ///< addFeatures refuses beyond this many held features
-    double id_offset = 1e9;              ///< first id of the built-in id counter (no allocator given)
     double min_inverse_distance = 1e-3;  ///< w clamp when placing tracks in W
 
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
@@ -108,9 +105,11 @@ class CShadowFilter
 
   /** Returns a new feature id, unique across SLAM and shadow features. */
   using IdAllocator = std::function<std::int64_t()>;
+  /** First id of the filter's own numbering (no allocator given: the filter alone, in tests). */
+  static constexpr std::int64_t kFirstOwnId = 1000000000;
 
   /** \param ids optional id allocator (e.g. the SLAM's); without it ids count from
-   * options.id_offset. \throws std::runtime_error on a null camera or invalid options. */
+   * kFirstOwnId. \throws std::runtime_error on a null camera or invalid options. */
   CShadowFilter(const TOptions& opts, camera::CCameraModel::Ptr cam, IdAllocator ids = {});
 
   /** Begins a frame: prediction (eq. 2) of every feature with the camera motion, its predicted pixel

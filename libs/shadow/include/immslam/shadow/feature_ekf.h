@@ -90,12 +90,11 @@ Vec7 normalizeGauge(const Vec7& x, Mat7* J = nullptr);
 void predictShadowState(TShadowState& s, double dt, const Vec3& t, const Vec4& dq, const Mat6& cov_increment,
                         double sigmaAccel);
 
-/** EKF update with one pixel measurement (eqs. 3-5; iterated: `iterations` Gauss-Newton
- * relinearizations, 1 = the plain EKF) by bayes::ekfUpdate, then normalizeGauge().
+/** EKF update with one pixel measurement (eqs. 3-5) by bayes::ekfUpdate, then normalizeGauge().
  * \param nis optional output: the normalized innovation squared at the prior.
  * \return false (state unchanged) if the prediction is not projectable or S is not PD. */
 bool updateShadowState(TShadowState& s, const camera::CCameraModel& cam, const Vec2& z, double sigmaPx,
-                       int iterations = 1, double* nis = nullptr);
+                       double* nis = nullptr);
 
 /** Innovation covariance \f$ S = J P J^\top + \sigma^2 I \f$ and the predicted pixel.
  * \return false if not projectable. */

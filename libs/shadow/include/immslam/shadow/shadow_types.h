@@ -27,7 +27,7 @@ namespace immslam::shadow
  * Caveat for the producer: the classifier composes the increments of consecutive frames as
  * independent. In an EKF SLAM the errors of consecutive increments are correlated (through the
  * velocity estimate), so over many frames the composed covariance under-states the true relative
- * uncertainty; CShadowFilter::TOptions::increment_cov_scale inflates it. */
+ * uncertainty. */
 struct TCameraMotion
 {
   double timestamp = 0;   ///< time of the current frame (s), copied into the report
