@@ -189,7 +189,7 @@ CRunOutputs::~CRunOutputs() = default;
 
 const COutputFiles& CRunOutputs::files() const { return *m_files; }
 
-std::vector<IFrameSink*> CRunOutputs::sinks() const
+std::vector<IFrameSink*> CRunOutputs::sinks()
 {
   std::vector<IFrameSink*> out;
   for (const auto& s : m_sinks) out.push_back(s.get());

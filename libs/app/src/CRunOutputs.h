@@ -32,7 +32,7 @@ class CRunOutputs
 
   /** The writers, in the order they are told: the files come before every writer that reads their
    * trajectory, the statistics (ATE) before the scene and the plots. */
-  std::vector<IFrameSink*> sinks() const;
+  std::vector<IFrameSink*> sinks();
 
  private:
   std::vector<std::unique_ptr<IFrameSink>> m_sinks;

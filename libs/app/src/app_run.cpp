@@ -124,7 +124,7 @@ int CImmMonoSlamApp::runImpl()
 
   detail::TSettledInput settled = detail::settleCamera(ctx, in, m_summary, m_stop);
   const std::unique_ptr<system::CMonoSlamSystem> sys = buildSystem(ctx, in);
-  const detail::CRunOutputs outputs(ctx, in, *sys, m_summary, settled.calibrationGuessed);
+  detail::CRunOutputs outputs(ctx, in, *sys, m_summary, settled.calibrationGuessed);
   writeEffectiveConfig(ctx, in, outputs.files(), effectiveConfigText(), version());
 
   detail::CFrameLoop loop(ctx, in, *sys, settled.reduction, m_summary);
