@@ -1,40 +1,25 @@
-/* imm-monoslam — the outputs of a run (see CRunOutputs.h). */
+/* imm-monoslam — the writers of a run (see CRunOutputs.h) and those that write files and figures
+ * (output_sinks.h; the visual ones are in visual_sinks.cpp). */
 #include "CRunOutputs.h"
 
+#include "output_sinks.h"
+
+#include <immslam/camera/mrpt_camera.h>
 #include <immslam/refine/bundle_adjust.h>
 #include <immslam/eval/statistics.h>
-#include <immslam/sim/CSyntheticSource.h>
+
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
+#include <cstdio>
 #include <iomanip>
 #include <sstream>
 
 namespace immslam::app::detail
 {
-namespace fs = std::filesystem;
-
 namespace
 {
-/** True motion labels of a rendered dataset folder (motion_labels.txt: "timestamp label"), if any. */
-std::map<long long, std::string> readMotionLabels(const std::string& folder)
-{
-  std::map<long long, std::string> out;
-  std::ifstream f(fs::path(folder) / "motion_labels.txt");
-  std::string line;
-  while (std::getline(f, line))
-  {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream is(line);
-    double t;
-    std::string label;
-    if (is >> t >> label) out[std::llround(t * 1e6)] = label;
-  }
-  return out;
-}
-
 /** [output] refine_trajectory: bundle adjustment of the run's own matches (the filter's trajectory as
  * the start), written to trajectory_refined.txt, with its ATE when the input has ground truth. */
 void refineTrajectory(const std::vector<eval::TSearchRow>& rows, const COutputFiles& out,
@@ -64,63 +49,39 @@ void refineTrajectory(const std::vector<eval::TSearchRow>& rows, const COutputFi
     log.logStr(mrpt::system::LVL_WARN, std::string("no refined trajectory: ") + e.what());
   }
 }
+
+std::string formatSeconds(double s)
+{
+  std::ostringstream o;
+  if (s >= 60)
+    o << static_cast<int>(s / 60) << "m" << std::setw(2) << std::setfill('0') << static_cast<int>(s) % 60 << "s";
+  else
+    o << std::fixed << std::setprecision(0) << s << "s";
+  return o.str();
+}
 }  // namespace
 
-CRunOutputs::CRunOutputs(const TRunContext& ctx, const TRunInputs& in, const system::CMonoSlamSystem& sys)
-    : m_ctx(ctx),
-      m_in(in),
-      m_files(ctx.args.outDir, sys.slam(), sys.shadowFilter() != nullptr, in.out.search_log),
-      m_visuals(ctx.args.outDir, in.out, sys.slam(), CLiveView::available(ctx.args.noGui)),
-      m_synthetic(dynamic_cast<const sim::CSyntheticSource*>(in.source.get())),
-      m_folderLabels(in.inputPath.empty() ? std::map<long long, std::string>() : readMotionLabels(in.inputPath))
+CFilesSink::CFilesSink(const TRunContext& ctx, const TRunInputs& in, const system::CMonoSlamSystem& sys)
+    : m_files(ctx.args.outDir, sys.slam(), sys.shadowFilter() != nullptr, in.out.search_log)
 {
 }
 
-void CRunOutputs::addFrame(std::size_t processed, const io::TFrame& frame, const system::TSystemFrame& fr,
-                           const slam::CMonoSlamIMM& slam)
+void CFilesSink::onFrame(const TFrameResult& r) { m_files.addFrame(r.report, r.slam); }
+
+void CFilesSink::onEnd(const slam::CMonoSlamIMM& slam, TRunSummary&) { m_files.writeMap(slam); }
+
+CStatisticsSink::CStatisticsSink(const TRunContext& ctx, const TRunInputs& in, const core::TTrajectory& trajectory)
+    : m_ctx(ctx), m_in(in), m_trajectory(trajectory)
 {
-  m_files.addFrame(fr, slam);
-  m_visuals.onFrame(processed, frame.colour.empty() ? frame.grey : frame.colour, fr, slam, m_files.trajectory());
-  if (m_in.out.plots) addLabel(frame);  // the true labels are only drawn in the probability plot
-  if (m_in.out.refine_trajectory) addRefineRows(fr);
-  if (m_in.out.smooth_trajectory)
-  {
-    if (!m_smoothing) m_smoothing = std::make_unique<CTrajectorySmoothing>(*m_in.cam);  // the camera is settled now
-    m_smoothing->addFrame(fr, m_files.trajectory().back());
-  }
-  m_frameMs.push_back(fr.totalMs);
-  m_matched.push_back(fr.slam->nMatched);
 }
 
-void CRunOutputs::addLabel(const io::TFrame& frame)
+void CStatisticsSink::onFrame(const TFrameResult& r)
 {
-  if (m_synthetic)
-    m_labels.push_back(sim::toString(m_synthetic->label(frame.index)));
-  else if (const auto it = m_folderLabels.find(std::llround(frame.timestamp * 1e6)); it != m_folderLabels.end())
-    m_labels.push_back(it->second);
+  m_frameMs.push_back(r.report.totalMs);
+  m_matched.push_back(r.report.slam->nMatched);
 }
 
-void CRunOutputs::addRefineRows(const system::TSystemFrame& fr)
-{
-  for (const auto& sr : fr.slam->searches)
-    if (sr.status == slam::TSearchRecord::EStatus::LowInnovationInlier ||
-        sr.status == slam::TSearchRecord::EStatus::RescuedInlier)
-    {
-      eval::TSearchRow row;
-      row.timestamp = fr.slam->timestamp;
-      row.featureId = sr.id;
-      row.h = sr.h;
-      row.S = sr.S;
-      row.found = true;
-      row.z = sr.z;
-      row.score = sr.score;
-      row.status = sr.status == slam::TSearchRecord::EStatus::RescuedInlier ? eval::ESearchStatus::Rescued
-                                                                            : eval::ESearchStatus::Inlier;
-      m_refineRows.push_back(row);
-    }
-}
-
-void CRunOutputs::finish(const slam::CMonoSlamIMM& slam, TRunSummary& summary)
+void CStatisticsSink::onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary)
 {
   mrpt::system::COutputLogger& log = m_ctx.log;
   if (summary.framesWithoutMask > 0)
@@ -129,7 +90,6 @@ void CRunOutputs::finish(const slam::CMonoSlamIMM& slam, TRunSummary& summary)
   if (summary.framesWithoutTracks > 0)
     log.logStr(mrpt::system::LVL_WARN, "[input] known_association: " + std::to_string(summary.framesWithoutTracks) +
                                            " frame(s) had no track at their timestamp (prediction only)");
-  m_files.writeMap(slam);
   summary.finalMapSize = static_cast<int>(slam.features().size());
   if (!m_frameMs.empty())
   {
@@ -138,23 +98,114 @@ void CRunOutputs::finish(const slam::CMonoSlamIMM& slam, TRunSummary& summary)
     summary.medianMatched = eval::median(m_matched);
     summary.fps = 1000.0 / std::max(summary.meanFrameMs, 1e-9);
   }
-  if (const auto gt = m_in.source->groundTruth(); gt && m_files.trajectory().size() >= 3)
+  if (const auto gt = m_in.source->groundTruth(); gt && m_trajectory.size() >= 3)
   {
     try
     {
-      summary.ate = eval::computeAte(m_files.trajectory(), *gt, eval::EAlignment::Sim3, 0.01);
+      summary.ate = eval::computeAte(m_trajectory, *gt, eval::EAlignment::Sim3, 0.01);
     }
     catch (const std::exception& e)
     {
       log.logStr(mrpt::system::LVL_WARN, std::string("no ATE: ") + e.what());
     }
   }
-  if (m_in.out.refine_trajectory)
-    refineTrajectory(m_refineRows, m_files, *m_in.cam, m_in.source->groundTruth(), summary, log);
-  if (m_smoothing)
-    m_smoothing->finish(m_files.path("trajectory_smoothed.txt"), m_in.source->groundTruth(), summary, log);
-  std::vector<std::string> warnings;
-  m_visuals.finish(slam, m_files.trajectory(), m_in.source->groundTruth(), summary.ate, m_labels, warnings);
-  for (const auto& w : warnings) log.logStr(mrpt::system::LVL_WARN, w);
+}
+
+CRefineSink::CRefineSink(const TRunContext& ctx, const TRunInputs& in, const COutputFiles& files)
+    : m_ctx(ctx), m_in(in), m_files(files)
+{
+}
+
+void CRefineSink::onFrame(const TFrameResult& r)
+{
+  // The low-innovation and rescued inliers of the frame.
+  const slam::TFrameReport& rep = *r.report.slam;
+  for (const auto& sr : rep.searches)
+    if (sr.status == slam::TSearchRecord::EStatus::LowInnovationInlier ||
+        sr.status == slam::TSearchRecord::EStatus::RescuedInlier)
+    {
+      eval::TSearchRow row;
+      row.timestamp = rep.timestamp;
+      row.featureId = sr.id;
+      row.h = sr.h;
+      row.S = sr.S;
+      row.found = true;
+      row.z = sr.z;
+      row.score = sr.score;
+      row.status = sr.status == slam::TSearchRecord::EStatus::RescuedInlier ? eval::ESearchStatus::Rescued
+                                                                            : eval::ESearchStatus::Inlier;
+      m_rows.push_back(row);
+    }
+}
+
+void CRefineSink::onEnd(const slam::CMonoSlamIMM&, TRunSummary& summary)
+{
+  refineTrajectory(m_rows, m_files, *m_in.cam, m_in.source->groundTruth(), summary, m_ctx.log);
+}
+
+CSmoothingSink::CSmoothingSink(const TRunInputs& in, const COutputFiles& files, mrpt::system::COutputLogger& log)
+    : m_in(in), m_files(files), m_log(log), m_smoothing(*in.cam)
+{
+}
+
+void CSmoothingSink::onFrame(const TFrameResult& r) { m_smoothing.addFrame(r.report, m_files.trajectory().back()); }
+
+void CSmoothingSink::onEnd(const slam::CMonoSlamIMM&, TRunSummary& summary)
+{
+  m_smoothing.finish(m_files.path("trajectory_smoothed.txt"), m_in.source->groundTruth(), summary, m_log);
+}
+
+CProgressSink::CProgressSink(const TRunSummary& summary, std::size_t total)
+    : m_summary(summary), m_total(total), m_start(Clock::now()), m_last(m_start)
+{
+}
+
+void CProgressSink::onFrame(const TFrameResult& r)
+{
+  if (std::chrono::duration<double>(Clock::now() - m_last).count() <= 0.2) return;
+  m_last = Clock::now();
+  const double el = std::chrono::duration<double>(m_last - m_start).count();
+  const double fps = (r.processed + 1) / std::max(el, 1e-9);
+  const VecX mu = r.slam.modelProbabilities();
+  int best = 0;
+  mu.maxCoeff(&best);
+  const std::size_t read = m_summary.framesRead;
+  std::fprintf(stderr, "\rframe %zu%s  %.1f fps  map %d  matched %d  %s %.2f", read,
+               m_total ? ("/" + std::to_string(m_total)).c_str() : "", fps, r.report.slam->nMap,
+               r.report.slam->nMatched, r.slam.models()[best].name.c_str(), mu[best]);
+  if (m_total > read) std::fprintf(stderr, "  ETA %s", formatSeconds((m_total - read) / std::max(fps, 1e-9)).c_str());
+  std::fprintf(stderr, "   ");
+}
+
+void CProgressSink::onEnd(const slam::CMonoSlamIMM&, TRunSummary&) { std::fprintf(stderr, "\n"); }
+
+CRunOutputs::CRunOutputs(const TRunContext& ctx, const TRunInputs& in, const system::CMonoSlamSystem& sys,
+                         const TRunSummary& summary, bool calibrationGuessed)
+{
+  if (!ctx.args.quiet && isatty(fileno(stderr)))
+    m_sinks.push_back(std::make_unique<CProgressSink>(summary, in.source->sizeHint()));
+  auto files = std::make_unique<CFilesSink>(ctx, in, sys);
+  m_files = &files->files();
+  m_sinks.push_back(std::move(files));
+  if (calibrationGuessed) camera::saveCalibFile(*in.cam, m_files->path("calib_guessed.txt"));
+  const core::TTrajectory& trajectory = m_files->trajectory();
+  m_sinks.push_back(std::make_unique<CStatisticsSink>(ctx, in, trajectory));
+  if (in.out.refine_trajectory) m_sinks.push_back(std::make_unique<CRefineSink>(ctx, in, *m_files));
+  if (in.out.smooth_trajectory) m_sinks.push_back(std::make_unique<CSmoothingSink>(in, *m_files, ctx.log));
+  if (in.out.overlays || in.out.overlay_video) m_sinks.push_back(std::make_unique<COverlaySink>(ctx.args.outDir, in.out));
+  if (CLiveView::available(ctx.args.noGui)) m_sinks.push_back(std::make_unique<CLiveViewSink>(in.out, trajectory));
+  if (in.out.scene || in.out.scene_every_n > 0) m_sinks.push_back(std::make_unique<CSceneSink>(ctx, in, trajectory));
+  if (in.out.plots) m_sinks.push_back(std::make_unique<CPlotSink>(ctx, in, sys.slam()));
+}
+
+CRunOutputs::~CRunOutputs() = default;
+
+const COutputFiles& CRunOutputs::files() const { return *m_files; }
+
+std::vector<IFrameSink*> CRunOutputs::sinks()
+{
+  std::vector<IFrameSink*> out;
+  for (const auto& s : m_sinks) out.push_back(s.get());
+  return out;
 }
 }  // namespace immslam::app::detail

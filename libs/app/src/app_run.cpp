@@ -1,11 +1,13 @@
-/* imm-monoslam — CImmMonoSlamApp::run(): resolve the inputs, build the system and the outputs, run
- * the frame loop, finish the outputs, print the summary. The steps live in this folder:
- * run_inputs.h (inputs), CFrameLoop.h (system and frames), CRunOutputs.h (output writers). */
+/* imm-monoslam — CImmMonoSlamApp::run(): resolve the inputs, settle the camera at the first frame,
+ * build the system once, build the writers, run the frame loop (which publishes every frame to the
+ * writers and tells them the end), print the summary. The steps live in this folder: run_inputs.h
+ * (inputs), settle_camera.h (the camera), CFrameLoop.h (frames), CRunOutputs.h (writers). */
 #include <immslam/app/CImmMonoSlamApp.h>
 
 #include "CFrameLoop.h"
 #include "CRunOutputs.h"
 #include "run_inputs.h"
+#include "settle_camera.h"
 
 #include <fstream>
 #include <iomanip>
@@ -22,7 +24,7 @@ void writeEffectiveConfig(const detail::TRunContext& ctx, const detail::TRunInpu
 {
   std::ofstream f(out.path("config_effective.ini"));
   f << "# Effective configuration of this run (" << version << ")\n# config: " << ctx.args.config << "\n# camera: "
-    << (in.guessCalibration ? in.calibOrigin + " (calib_guessed.txt)" : in.cam->toCalibLine()) << "\n"
+    << in.calibAsGiven << "\n"
     << effective;
   if (!ctx.args.quiet) ctx.log.logStr(mrpt::system::LVL_DEBUG, "effective configuration:\n" + effective);
 }
@@ -76,6 +78,20 @@ int exitStatus(const TRunSummary& sum, const io::CImageSource& source, const std
   return 0;
 }
 
+/** The system of a run, built once for the settled camera.
+ * \throws std::runtime_error prefixed by the config file for a bad [system], [slam], [shadow]... section. */
+std::unique_ptr<system::CMonoSlamSystem> buildSystem(const detail::TRunContext& ctx, const detail::TRunInputs& in)
+{
+  try
+  {
+    return std::make_unique<system::CMonoSlamSystem>(ctx.cfg, in.cam);
+  }
+  catch (const std::exception& e)
+  {
+    throw std::runtime_error(ctx.args.config + ": " + e.what());
+  }
+}
+
 /** Clears the live source published to requestStop(), on every way out of a run. */
 struct TLiveGuard
 {
@@ -108,13 +124,13 @@ int CImmMonoSlamApp::runImpl()
   const TLiveGuard liveGuard{m_live};
   detail::resolveInputs(ctx, in, m_live, m_stop);
 
-  detail::CFrameLoop loop(ctx, in, m_summary);
-  detail::CRunOutputs outputs(ctx, in, loop.system());
+  detail::TSettledInput settled = detail::settleCamera(ctx, in, m_summary, m_stop);
+  const std::unique_ptr<system::CMonoSlamSystem> sys = buildSystem(ctx, in);
+  detail::CRunOutputs outputs(ctx, in, *sys, m_summary, settled.calibrationGuessed);
   writeEffectiveConfig(ctx, in, outputs.files(), effectiveConfigText(), version());
 
-  loop.run(outputs, m_stop);
-
-  outputs.finish(loop.system().slam(), m_summary);
+  detail::CFrameLoop loop(ctx, in, *sys, settled.reduction, m_summary);
+  loop.run(std::move(settled.first), outputs.sinks(), m_stop);
   std::cout << summaryLine(m_summary, m_args.outDir) << std::endl;
   return exitStatus(m_summary, *in.source, m_args.outDir);
 }

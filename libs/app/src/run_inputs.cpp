@@ -21,6 +21,9 @@ namespace fs = std::filesystem;
 
 namespace
 {
+/** Skipped entries logged one by one (and kept in TRunSummary::skipReasons); the rest are counted. */
+constexpr std::size_t kLoggedSkips = 20;
+
 /** A path from the config: relative to the config's folder if it exists there, else as given. */
 std::string resolvePath(const std::string& p, const std::string& configDir)
 {
@@ -218,6 +221,7 @@ void decideCalibration(const TRunContext& ctx, TRunInputs& in)
   if (!in.cam)
     throw std::runtime_error("no camera calibration: the input has none; give --calib FILE (calib.txt format), a "
                              "[camera] section in " + ctx.args.config + ", or --fov DEG to guess one");
+  in.calibAsGiven = in.guessCalibration ? in.calibOrigin + " (calib_guessed.txt)" : in.cam->toCalibLine();
   if (!in.guessCalibration)
     ctx.log.logStr(mrpt::system::LVL_INFO, "camera (" + in.calibOrigin + "): " + in.cam->toCalibLine());
 }
@@ -233,5 +237,19 @@ void resolveInputs(const TRunContext& ctx, TRunInputs& in, std::atomic<io::CLive
   loadExclusionMasks(ctx, in);
   loadKnownTracks(ctx, in);
   decideCalibration(ctx, in);
+}
+
+void countSkip(const TRunContext& ctx, TRunSummary& summary, const std::string& reason)
+{
+  ++summary.framesSkipped;
+  // The first kLoggedSkips reasons are logged and kept; a rawlog of many sensors (IMU at 200 Hz, a second
+  // camera) would otherwise bury the log: the rest are counted (summary line).
+  if (summary.skipReasons.size() < kLoggedSkips)
+  {
+    summary.skipReasons.push_back(reason);
+    ctx.log.logStr(mrpt::system::LVL_WARN, "skipped: " + reason);
+    if (summary.skipReasons.size() == kLoggedSkips)
+      ctx.log.logStr(mrpt::system::LVL_WARN, "further skipped entries are counted, not logged");
+  }
 }
 }  // namespace immslam::app::detail

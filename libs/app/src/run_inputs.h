@@ -41,6 +41,7 @@ struct TRunInputs
   TOutputOptions out;                            ///< [output]
   camera::CCameraModel::Ptr cam;                 ///< the calibration (a placeholder while guessCalibration)
   std::string calibOrigin;                       ///< where cam comes from, for the log
+  std::string calibAsGiven;                      ///< the calibration before the first frame (config_effective.ini)
   bool guessCalibration = false;                 ///< --fov: cam is guessed again at the first frame's size
   io::CImageSource::Ptr source;                  ///< INPUT, --live, [input] source or the built-in scene
   std::shared_ptr<io::CRawlogRecorder> recorder; ///< --record (live input only)
@@ -58,4 +59,7 @@ struct TRunInputs
  * \throws std::runtime_error naming the file, key or option at fault. */
 void resolveInputs(const TRunContext& ctx, TRunInputs& in, std::atomic<io::CLiveCameraSource*>& live,
                    const std::atomic<bool>& stop);
+
+/** Counts a skipped input entry in `summary`; the first few reasons are logged and kept. */
+void countSkip(const TRunContext& ctx, TRunSummary& summary, const std::string& reason);
 }  // namespace immslam::app::detail

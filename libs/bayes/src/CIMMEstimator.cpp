@@ -129,6 +129,42 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps, const std::vector
     if (in(j).x.size() != n || in(j).P.rows() != n || in(j).P.cols() != n)
       throw std::logic_error("IMM::mix: modes have different dimensions");
 
+  splitMixingWeights(pi);
+  const int nGroups = static_cast<int>(m_mixSupp.size());
+  const bool common = nGroups > 0;
+  mixMeans(n);
+  const bool inplace = prepareMixOutputs(n);
+
+  // Covariances, by chunks of 16 columns: column c of every output, rows [c, n) (lower triangle,
+  // every access sequential), then the chunk's rows of the upper triangle copied from its own lower
+  // columns (exactly symmetric whatever the inputs' rounding). A chunk writes the lower part of its
+  // columns and the upper part of its rows: disjoint from every other chunk, and the arithmetic of a
+  // column does not depend on the chunk or the thread, so the result is bitwise the same for any pool.
+  constexpr Eigen::Index chunk = 16;
+  const int nChunks = static_cast<int>((n + chunk - 1) / chunk);
+  if (common) m_mixU.resize(n, static_cast<Eigen::Index>(nChunks) * nGroups);  // one column per chunk and group
+  auto job = [&](int t) {
+    const Eigen::Index c0 = static_cast<Eigen::Index>(t) * chunk, c1 = std::min(n, c0 + chunk);
+    for (Eigen::Index col = c0; col < c1; ++col) mixColumn(n, col, t, nGroups, inplace);
+    mirrorChunk(n, c0, c1, inplace, lowerOnly);
+  };
+  if (pool)
+    pool->parallelFor(0, nChunks, job);
+  else
+    for (int t = 0; t < nChunks; ++t) job(t);
+
+  for (int i = 0; i < r; ++i)
+  {
+    m_modes[i].x = m_mixXbar.col(i);
+    if (!inplace) std::swap(m_modes[i].P, m_scratch[i]);
+  }
+  std::fill(m_alias.begin(), m_alias.end(), -1);  // every output is in its own storage
+  m_numAliased = 0;
+}
+
+void CIMMEstimator::splitMixingWeights(const MatX& pi)
+{
+  const int r = numModels();
   // Split of the weights: W_ji = (beta_i + Delta_ji) mu^j / c_i over the support J_i = {j: pi_ji > 0}
   // with beta_i = min_{j in J_i} pi_ji (the column minimum, diagonal included, when the column has no
   // zero) and Delta_ji = pi_ji - beta_i >= 0. m_mixB[i] = beta_i / c_i weighs the common term of J_i,
@@ -160,9 +196,13 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps, const std::vector
     m_mixGroup[i] = static_cast<int>(g - m_mixSupp.begin());
     if (g == m_mixSupp.end()) m_mixSupp.push_back(supp);
   }
-  const int nGroups = static_cast<int>(m_mixSupp.size());
-  const bool common = nGroups > 0;
+}
 
+void CIMMEstimator::mixMeans(Eigen::Index n)
+{
+  const int r = numModels();
+  const int nGroups = static_cast<int>(m_mixSupp.size());
+  const auto in = [this](int j) -> const TGaussian& { return m_modes[root(j)]; };
   // Means. xbar^i = sum_j W_ji x^j (as the textbook); the spreads are expanded around
   // xm = sum_j mu^j x^j: y_j = x^j - xm and ybar_i = sum_j W_ji y_j (= xbar^i - xm), differences.
   m_mixXm.setZero(n);
@@ -195,6 +235,11 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps, const std::vector
         m_mixXbar.col(i).noalias() += m_mixW(j, i) * in(j).x;
         m_mixYbar.col(i).noalias() += m_mixW(j, i) * m_mixY.col(j);
       }
+}
+
+bool CIMMEstimator::prepareMixOutputs(Eigen::Index n)
+{
+  const int r = numModels();
   // In place when every output's own terms come from its own input only (A diagonal: pi = a I + b 1 1^T,
   // the default bank): column col of P^i is read (for u and for output i) before it is overwritten, and
   // the upper triangle, rewritten by the mirror, is never read. Otherwise into m_scratch, then swapped.
@@ -219,102 +264,88 @@ void CIMMEstimator::mix(math::CThreadPool* pool, double steps, const std::vector
     if (m_alias[i] < 0) m_mixOrder.push_back(i);
   for (int i = 0; i < r; ++i)
     if (m_modes[i].P.rows() != n || m_modes[i].P.cols() != n) m_modes[i].P.resize(n, n);  // (stale storage)
+  return inplace;
+}
 
-  // Covariances, by chunks of 16 columns: column c of every output, rows [c, n) (lower triangle,
-  // every access sequential), then the chunk's rows of the upper triangle copied from its own lower
-  // columns (exactly symmetric whatever the inputs' rounding). A chunk writes the lower part of its
-  // columns and the upper part of its rows: disjoint from every other chunk, and the arithmetic of a
-  // column does not depend on the chunk or the thread, so the result is bitwise the same for any pool.
-  constexpr Eigen::Index chunk = 16;
-  const int nChunks = static_cast<int>((n + chunk - 1) / chunk);
-  if (common) m_mixU.resize(n, static_cast<Eigen::Index>(nChunks) * nGroups);  // one column per chunk and group
-  auto job = [&](int t) {
-    const Eigen::Index c0 = static_cast<Eigen::Index>(t) * chunk, c1 = std::min(n, c0 + chunk);
-    for (Eigen::Index col = c0; col < c1; ++col)
+void CIMMEstimator::mixColumn(Eigen::Index n, Eigen::Index col, int t, int nGroups, bool inplace)
+{
+  const int r = numModels();
+  const auto in = [this](int j) -> const TGaussian& { return m_modes[root(j)]; };
+  const Eigen::Index h = n - col;
+  // u_g = (S_J + T_J)(col:n, col) = sum_{j in J} mu^j (y_j y_j(col) + P^j(:, col))
+  for (int g = 0; g < nGroups; ++g)
+  {
+    Eigen::Map<VecX> u(m_mixU.col(static_cast<Eigen::Index>(t) * nGroups + g).data() + col, h);
+    const MatX& muYT = m_mixMuYTg[g].size() ? m_mixMuYTg[g] : m_mixMuYT;
+    u.noalias() = m_mixY.bottomRows(h) * muYT.col(col);
+    for (int j = 0; j < r; ++j)
+      if (m_mu[j] > 0 && m_mixSupp[g][j]) u += m_mu[j] * in(j).P.col(col).tail(h);
+  }
+  for (const int i : m_mixOrder)
+  {
+    const int grp = m_mixGroup[i];
+    Eigen::Map<VecX> u(grp >= 0 ? m_mixU.col(static_cast<Eigen::Index>(t) * nGroups + grp).data() + col : nullptr,
+                       grp >= 0 ? h : 0);
+    auto o = (inplace ? m_modes[i].P : m_scratch[i]).col(col).tail(h);
+    if (!(m_muPred[i] > 0))
     {
-      const Eigen::Index h = n - col;
-      // u_g = (S_J + T_J)(col:n, col) = sum_{j in J} mu^j (y_j y_j(col) + P^j(:, col))
-      for (int g = 0; g < nGroups; ++g)
-      {
-        Eigen::Map<VecX> u(m_mixU.col(static_cast<Eigen::Index>(t) * nGroups + g).data() + col, h);
-        const MatX& muYT = m_mixMuYTg[g].size() ? m_mixMuYTg[g] : m_mixMuYT;
-        u.noalias() = m_mixY.bottomRows(h) * muYT.col(col);
-        for (int j = 0; j < r; ++j)
-          if (m_mu[j] > 0 && m_mixSupp[g][j]) u += m_mu[j] * in(j).P.col(col).tail(h);
-      }
-      for (const int i : m_mixOrder)
-      {
-        const int grp = m_mixGroup[i];
-        Eigen::Map<VecX> u(grp >= 0 ? m_mixU.col(static_cast<Eigen::Index>(t) * nGroups + grp).data() + col : nullptr,
-                           grp >= 0 ? h : 0);
-        auto o = (inplace ? m_modes[i].P : m_scratch[i]).col(col).tail(h);
-        if (!(m_muPred[i] > 0))
-        {
-          if (!inplace) o = in(i).P.col(col).tail(h);
-          continue;
-        }
-        // o = B_i u + sum_{j: A_ji > 0} A_ji (P^j(:, col) + y_j y_j(col)) - ybar_i ybar_i(col),
-        // the first of mode i's own terms fused with the common one (one pass for pi = a I + b 1 1^T).
-        const auto yb = m_mixYbar.col(i).tail(h);
-        const double ybc = m_mixYbar(col, i), b = m_mixB[i];
-        int j = 0;
-        while (j < r && !(m_mixA(j, i) > 0)) ++j;
-        if (j == r)
-        {
-          if (b > 0)
-            o = b * u - yb * ybc;
-          else
-            o = -(yb * ybc);
-          continue;
-        }
-        {
-          const double a = m_mixA(j, i);
-          const auto Pj = in(j).P.col(col).tail(h);
-          const auto y = m_mixY.col(j).tail(h);
-          if (b > 0)
-            o = b * u + a * Pj + (a * m_mixY(col, j)) * y - yb * ybc;
-          else
-            o = a * Pj + (a * m_mixY(col, j)) * y - yb * ybc;
-        }
-        for (++j; j < r; ++j)
-        {
-          const double a = m_mixA(j, i);
-          if (a > 0) o += a * in(j).P.col(col).tail(h) + (a * m_mixY(col, j)) * m_mixY.col(j).tail(h);
-        }
-      }
+      if (!inplace) o = in(i).P.col(col).tail(h);
+      continue;
     }
-    // Mirror: rows [c0, c1) of the upper triangle (columns > row) from this chunk's lower columns.
-    // The destination is 16 doubles per column, n doubles apart: no hardware prefetcher follows
-    // that, so its cache lines are requested a few columns ahead (mix ~10 % faster measured at n = 613).
-    for (int i = 0; i < r; ++i)
+    // o = B_i u + sum_{j: A_ji > 0} A_ji (P^j(:, col) + y_j y_j(col)) - ybar_i ybar_i(col),
+    // the first of mode i's own terms fused with the common one (one pass for pi = a I + b 1 1^T).
+    const auto yb = m_mixYbar.col(i).tail(h);
+    const double ybc = m_mixYbar(col, i), b = m_mixB[i];
+    int j = 0;
+    while (j < r && !(m_mixA(j, i) > 0)) ++j;
+    if (j == r)
     {
-      if (inplace && !(m_muPred[i] > 0)) continue;  // untouched
-      if (lowerOnly && (*lowerOnly)[i] && m_muPred[i] > 0) continue;  // the caller mirrors
-      double* S = (inplace ? m_modes[i].P : m_scratch[i]).data();
-      for (Eigen::Index k = c0 + 1; k < n; ++k)
-      {
-#if defined(__GNUC__) || defined(__clang__)
-        constexpr Eigen::Index ahead = 4;
-        if (k + ahead < n)
-          for (Eigen::Index a = c0; a < c1 + 7; a += 8) __builtin_prefetch(S + std::min(a, c1 - 1) + (k + ahead) * n, 1);
-#endif
-        const Eigen::Index e = std::min(k, c1);
-        for (Eigen::Index a = c0; a < e; ++a) S[a + k * n] = S[k + a * n];
-      }
+      if (b > 0)
+        o = b * u - yb * ybc;
+      else
+        o = -(yb * ybc);
+      continue;
     }
-  };
-  if (pool)
-    pool->parallelFor(0, nChunks, job);
-  else
-    for (int t = 0; t < nChunks; ++t) job(t);
+    {
+      const double a = m_mixA(j, i);
+      const auto Pj = in(j).P.col(col).tail(h);
+      const auto y = m_mixY.col(j).tail(h);
+      if (b > 0)
+        o = b * u + a * Pj + (a * m_mixY(col, j)) * y - yb * ybc;
+      else
+        o = a * Pj + (a * m_mixY(col, j)) * y - yb * ybc;
+    }
+    for (++j; j < r; ++j)
+    {
+      const double a = m_mixA(j, i);
+      if (a > 0) o += a * in(j).P.col(col).tail(h) + (a * m_mixY(col, j)) * m_mixY.col(j).tail(h);
+    }
+  }
+}
 
+void CIMMEstimator::mirrorChunk(Eigen::Index n, Eigen::Index c0, Eigen::Index c1, bool inplace,
+                                const std::vector<char>* lowerOnly)
+{
+  const int r = numModels();
+  // Mirror: rows [c0, c1) of the upper triangle (columns > row) from this chunk's lower columns.
+  // The destination is 16 doubles per column, n doubles apart: no hardware prefetcher follows
+  // that, so its cache lines are requested a few columns ahead (mix ~10 % faster measured at n = 613).
   for (int i = 0; i < r; ++i)
   {
-    m_modes[i].x = m_mixXbar.col(i);
-    if (!inplace) std::swap(m_modes[i].P, m_scratch[i]);
+    if (inplace && !(m_muPred[i] > 0)) continue;  // untouched
+    if (lowerOnly && (*lowerOnly)[i] && m_muPred[i] > 0) continue;  // the caller mirrors
+    double* S = (inplace ? m_modes[i].P : m_scratch[i]).data();
+    for (Eigen::Index k = c0 + 1; k < n; ++k)
+    {
+#if defined(__GNUC__) || defined(__clang__)
+      constexpr Eigen::Index ahead = 4;
+      if (k + ahead < n)
+        for (Eigen::Index a = c0; a < c1 + 7; a += 8) __builtin_prefetch(S + std::min(a, c1 - 1) + (k + ahead) * n, 1);
+#endif
+      const Eigen::Index e = std::min(k, c1);
+      for (Eigen::Index a = c0; a < e; ++a) S[a + k * n] = S[k + a * n];
+    }
   }
-  std::fill(m_alias.begin(), m_alias.end(), -1);  // every output is in its own storage
-  m_numAliased = 0;
 }
 
 void CIMMEstimator::updateProbabilities(const VecX& logLik)

@@ -99,6 +99,22 @@ bool allZero(const std::vector<double>& v)
 {
   return std::all_of(v.begin(), v.end(), [](double x) { return x == 0; });
 }
+
+/** The model a [camera] section without `model` names by its `distortion_model` (MRPT's names):
+ * none, plumb_bob (pinhole when every coefficient is 0) or kannala_brandt; absent: by `dist`. */
+std::string modelFromDistortion(const CSectionReader& r, const std::vector<double>& dist)
+{
+  const std::string dm = math::toLower(r.str("distortion_model"));
+  if (dm == "none") return "pinhole";
+  if (dm == "plumb_bob")
+  {
+    if (!r.has("dist")) throw std::runtime_error(r.where() + ": missing key 'dist' (distortion_model = plumb_bob)");
+    return allZero(plumbBob(dist, r)) ? "pinhole" : "opencv";
+  }
+  if (dm.empty()) return allZero(dist) ? "pinhole" : "opencv";
+  if (dm == "kannala_brandt") return "fisheye";
+  r.fail("distortion_model", "unknown value '" + dm + "' (expected none, plumb_bob or kannala_brandt)");
+}
 }  // namespace
 
 CCameraModel::Ptr fromTCamera(const mrpt::img::TCamera& cam)
@@ -194,24 +210,7 @@ CCameraModel::Ptr loadCameraFromConfig(
   std::string model = math::toLower(r.str("model"));
   const std::vector<double> dist = r.list("dist");
   const bool explicitModel = !model.empty();
-  if (!explicitModel)
-  {
-    const std::string dm = math::toLower(r.str("distortion_model"));
-    if (dm == "none")
-      model = "pinhole";
-    else if (dm == "plumb_bob")
-    {
-      if (!r.has("dist"))
-        throw std::runtime_error(r.where() + ": missing key 'dist' (distortion_model = plumb_bob)");
-      model = allZero(plumbBob(dist, r)) ? "pinhole" : "opencv";
-    }
-    else if (dm.empty())
-      model = allZero(dist) ? "pinhole" : "opencv";
-    else if (dm == "kannala_brandt")
-      model = "fisheye";
-    else
-      r.fail("distortion_model", "unknown value '" + dm + "' (expected none, plumb_bob or kannala_brandt)");
-  }
+  if (!explicitModel) model = modelFromDistortion(r, dist);
 
   try
   {

@@ -131,6 +131,88 @@ core::TTrajectory readNonEmpty(const std::string& path)
   if (t.empty()) throw std::runtime_error(path + ": no poses in trajectory file");
   return t;
 }
+
+/** The --json report: one JSON object. */
+std::string jsonReport(const TAppOptions& o, std::size_t nEst, std::size_t nGt, const TAteResult& ate,
+                       const std::optional<TRpeResult>& rpe)
+{
+  std::ostringstream j;
+  j << "{\n";
+  j << "  \"est\": " << jsonString(o.estPath) << ",\n";
+  j << "  \"gt\": " << jsonString(o.gtPath) << ",\n";
+  j << "  \"n_est\": " << nEst << ",\n";
+  j << "  \"n_gt\": " << nGt << ",\n";
+  j << "  \"alignment\": " << jsonString(alignmentName(o.alignment)) << ",\n";
+  j << "  \"max_dt\": " << jsonNumber(o.maxDt) << ",\n";
+  j << "  \"n_pairs\": " << ate.nPairs << ",\n";
+  j << "  \"ate_rmse\": " << jsonNumber(ate.rmse) << ",\n";
+  j << "  \"ate_mean\": " << jsonNumber(ate.mean) << ",\n";
+  j << "  \"ate_median\": " << jsonNumber(ate.median) << ",\n";
+  j << "  \"ate_max\": " << jsonNumber(ate.max) << ",\n";
+  j << "  \"scale\": " << jsonNumber(ate.scale) << ",\n";
+  j << "  \"alignment_rank\": " << ate.alignmentRank << ",\n";
+  j << "  \"path_length\": " << jsonNumber(ate.pathLength) << ",\n";
+  j << "  \"extent\": " << jsonNumber(ate.extent) << ",\n";
+  j << "  \"ate_over_path_percent\": " << jsonNumber(100 * ate.rmseOverPath) << ",\n";
+  j << "  \"ate_over_extent_percent\": " << jsonNumber(100 * ate.rmseOverExtent) << ",\n";
+  j << "  \"rotation_rmse_deg\": " << jsonNumber(ate.rotationRmseDeg);
+  if (rpe)
+  {
+    j << ",\n  \"rpe_delta\": " << rpe->delta << ",\n";
+    j << "  \"rpe_n\": " << rpe->nPairs << ",\n";
+    j << "  \"rpe_translation_rmse\": " << jsonNumber(rpe->translationRmse) << ",\n";
+    j << "  \"rpe_rotation_rmse_deg\": " << jsonNumber(rpe->rotationRmseDeg) << ",\n";
+    j << "  \"rpe_direction_n\": " << rpe->nDirections << ",\n";
+    j << "  \"rpe_direction_median_deg\": " << jsonNumber(rpe->directionMedianDeg) << ",\n";
+    j << "  \"rpe_direction_rmse_deg\": " << jsonNumber(rpe->directionRmseDeg) << ",\n";
+    j << "  \"rpe_scale_ratio_median\": " << jsonNumber(rpe->scaleRatioMedian) << ",\n";
+    j << "  \"rpe_scale_ratio_p10\": " << jsonNumber(rpe->scaleRatioP10) << ",\n";
+    j << "  \"rpe_scale_ratio_p90\": " << jsonNumber(rpe->scaleRatioP90) << ",\n";
+    j << "  \"rpe_scale_log_rms\": " << jsonNumber(rpe->scaleLogRms);
+  }
+  j << "\n}\n";
+  return j.str();
+}
+
+/** The text report: one "name: value" line a figure. */
+std::string textReport(const TAppOptions& o, std::size_t nEst, std::size_t nGt, const TAteResult& ate,
+                       const std::optional<TRpeResult>& rpe)
+{
+  std::ostringstream s;
+  s.imbue(std::locale::classic());
+  const auto row = [&](const char* name) -> std::ostream& { return s << std::left << std::setw(22) << name << ": "; };
+  const auto num = [](double v) {
+    std::ostringstream n;
+    n.imbue(std::locale::classic());
+    n << std::setprecision(6) << v;
+    return n.str();
+  };
+  row("estimate") << o.estPath << " (" << nEst << " poses)\n";
+  row("ground truth") << o.gtPath << " (" << nGt << " poses)\n";
+  row("alignment") << alignmentName(o.alignment) << " (max dt " << num(o.maxDt) << " s)\n";
+  row("pairs") << ate.nPairs << "\n";
+  row("ATE rmse") << num(ate.rmse) << "\n";
+  row("ATE mean") << num(ate.mean) << "\n";
+  row("ATE median") << num(ate.median) << "\n";
+  row("ATE max") << num(ate.max) << "\n";
+  row("scale") << num(ate.scale) << (ate.alignmentRank < 2 ? "  (degenerate alignment)" : "") << "\n";
+  row("path length") << num(ate.pathLength) << "\n";
+  row("extent") << num(ate.extent) << "\n";
+  row("ATE / path") << num(100 * ate.rmseOverPath) << " %\n";
+  row("ATE / extent") << num(100 * ate.rmseOverExtent) << " %\n";
+  row("rotation RMSE") << num(ate.rotationRmseDeg) << " deg\n";
+  if (rpe)
+  {
+    row("RPE delta") << rpe->delta << " (" << rpe->nPairs << " motions)\n";
+    row("RPE translation rmse") << num(rpe->translationRmse) << "\n";
+    row("RPE rotation rmse") << num(rpe->rotationRmseDeg) << " deg\n";
+    row("RPE direction") << "median " << num(rpe->directionMedianDeg) << " deg, rmse " << num(rpe->directionRmseDeg)
+                         << " deg (" << rpe->nDirections << " motions >= " << num(rpe->minMotion) << ")\n";
+    row("RPE local scale") << "median " << num(rpe->scaleRatioMedian) << ", 10-90 % " << num(rpe->scaleRatioP10) << " - "
+                           << num(rpe->scaleRatioP90) << ", log rms " << num(rpe->scaleLogRms) << " (same motions)\n";
+  }
+  return s.str();
+}
 }  // namespace
 
 std::string evalAppUsage(const std::string& prog)
@@ -197,79 +279,11 @@ int runEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ost
 
   if (o.json)
   {
-    std::ostringstream j;
-    j << "{\n";
-    j << "  \"est\": " << jsonString(o.estPath) << ",\n";
-    j << "  \"gt\": " << jsonString(o.gtPath) << ",\n";
-    j << "  \"n_est\": " << nEst << ",\n";
-    j << "  \"n_gt\": " << nGt << ",\n";
-    j << "  \"alignment\": " << jsonString(alignmentName(o.alignment)) << ",\n";
-    j << "  \"max_dt\": " << jsonNumber(o.maxDt) << ",\n";
-    j << "  \"n_pairs\": " << ate.nPairs << ",\n";
-    j << "  \"ate_rmse\": " << jsonNumber(ate.rmse) << ",\n";
-    j << "  \"ate_mean\": " << jsonNumber(ate.mean) << ",\n";
-    j << "  \"ate_median\": " << jsonNumber(ate.median) << ",\n";
-    j << "  \"ate_max\": " << jsonNumber(ate.max) << ",\n";
-    j << "  \"scale\": " << jsonNumber(ate.scale) << ",\n";
-    j << "  \"alignment_rank\": " << ate.alignmentRank << ",\n";
-    j << "  \"path_length\": " << jsonNumber(ate.pathLength) << ",\n";
-    j << "  \"extent\": " << jsonNumber(ate.extent) << ",\n";
-    j << "  \"ate_over_path_percent\": " << jsonNumber(100 * ate.rmseOverPath) << ",\n";
-    j << "  \"ate_over_extent_percent\": " << jsonNumber(100 * ate.rmseOverExtent) << ",\n";
-    j << "  \"rotation_rmse_deg\": " << jsonNumber(ate.rotationRmseDeg);
-    if (rpe)
-    {
-      j << ",\n  \"rpe_delta\": " << rpe->delta << ",\n";
-      j << "  \"rpe_n\": " << rpe->nPairs << ",\n";
-      j << "  \"rpe_translation_rmse\": " << jsonNumber(rpe->translationRmse) << ",\n";
-      j << "  \"rpe_rotation_rmse_deg\": " << jsonNumber(rpe->rotationRmseDeg) << ",\n";
-      j << "  \"rpe_direction_n\": " << rpe->nDirections << ",\n";
-      j << "  \"rpe_direction_median_deg\": " << jsonNumber(rpe->directionMedianDeg) << ",\n";
-      j << "  \"rpe_direction_rmse_deg\": " << jsonNumber(rpe->directionRmseDeg) << ",\n";
-      j << "  \"rpe_scale_ratio_median\": " << jsonNumber(rpe->scaleRatioMedian) << ",\n";
-      j << "  \"rpe_scale_ratio_p10\": " << jsonNumber(rpe->scaleRatioP10) << ",\n";
-      j << "  \"rpe_scale_ratio_p90\": " << jsonNumber(rpe->scaleRatioP90) << ",\n";
-      j << "  \"rpe_scale_log_rms\": " << jsonNumber(rpe->scaleLogRms);
-    }
-    j << "\n}\n";
-    out << j.str();
+    out << jsonReport(o, nEst, nGt, ate, rpe);
     return 0;
   }
 
-  std::ostringstream s;
-  s.imbue(std::locale::classic());
-  const auto row = [&](const char* name) -> std::ostream& { return s << std::left << std::setw(22) << name << ": "; };
-  const auto num = [](double v) {
-    std::ostringstream n;
-    n.imbue(std::locale::classic());
-    n << std::setprecision(6) << v;
-    return n.str();
-  };
-  row("estimate") << o.estPath << " (" << nEst << " poses)\n";
-  row("ground truth") << o.gtPath << " (" << nGt << " poses)\n";
-  row("alignment") << alignmentName(o.alignment) << " (max dt " << num(o.maxDt) << " s)\n";
-  row("pairs") << ate.nPairs << "\n";
-  row("ATE rmse") << num(ate.rmse) << "\n";
-  row("ATE mean") << num(ate.mean) << "\n";
-  row("ATE median") << num(ate.median) << "\n";
-  row("ATE max") << num(ate.max) << "\n";
-  row("scale") << num(ate.scale) << (ate.alignmentRank < 2 ? "  (degenerate alignment)" : "") << "\n";
-  row("path length") << num(ate.pathLength) << "\n";
-  row("extent") << num(ate.extent) << "\n";
-  row("ATE / path") << num(100 * ate.rmseOverPath) << " %\n";
-  row("ATE / extent") << num(100 * ate.rmseOverExtent) << " %\n";
-  row("rotation RMSE") << num(ate.rotationRmseDeg) << " deg\n";
-  if (rpe)
-  {
-    row("RPE delta") << rpe->delta << " (" << rpe->nPairs << " motions)\n";
-    row("RPE translation rmse") << num(rpe->translationRmse) << "\n";
-    row("RPE rotation rmse") << num(rpe->rotationRmseDeg) << " deg\n";
-    row("RPE direction") << "median " << num(rpe->directionMedianDeg) << " deg, rmse " << num(rpe->directionRmseDeg)
-                         << " deg (" << rpe->nDirections << " motions >= " << num(rpe->minMotion) << ")\n";
-    row("RPE local scale") << "median " << num(rpe->scaleRatioMedian) << ", 10-90 % " << num(rpe->scaleRatioP10) << " - "
-                           << num(rpe->scaleRatioP90) << ", log rms " << num(rpe->scaleLogRms) << " (same motions)\n";
-  }
-  out << s.str();
+  out << textReport(o, nEst, nGt, ate, rpe);
   return 0;
 }
 }  // namespace immslam::evalapp

@@ -36,10 +36,57 @@ bool quadraticPeak(const float s[3][3], Vec2& offset)
   return offset.allFinite() && offset.norm() <= 1.0;
 }
 
+namespace
+{
+/** The (n + 2) x (m + 2) window of `grey` centred at p, bilinearly interpolated, into win (one
+ * extra pixel each side for the gradients); false when it is not inside the image. */
+bool sampleWindow(const cv::Mat& grey, const Vec2& p, int n, int m, std::vector<float>& win)
+{
+  const int htx = n / 2, hty = m / 2, wn = n + 2, wm = m + 2;
+  const double flx = std::floor(p.x()), fly = std::floor(p.y());
+  const int left = int(flx) - htx - 1, top = int(fly) - hty - 1;
+  if (left < 0 || top < 0 || left + wn >= grey.cols || top + wm >= grey.rows) return false;
+  const float fx = float(p.x() - flx), fy = float(p.y() - fly);
+  const float w00 = (1 - fx) * (1 - fy), w01 = fx * (1 - fy), w10 = (1 - fx) * fy, w11 = fx * fy;
+  for (int j = 0; j < wm; ++j)
+  {
+    const std::uint8_t* r0 = grey.ptr<std::uint8_t>(top + j) + left;
+    const std::uint8_t* r1 = grey.ptr<std::uint8_t>(top + j + 1) + left;
+    float* w = &win[size_t(j) * wn];
+    for (int i = 0; i < wn; ++i)
+      w[i] = w00 * r0[i] + w01 * r0[i + 1] + w10 * r1[i] + w11 * r1[i + 1];
+  }
+  return true;
+}
+
+/** The photometric start of refineTranslation(): gain a and offset b that match the window's
+ * (win, n x m inside its 1-pixel border) mean and standard deviation to the template's (from its
+ * sums tt = sum T^2 and ts = sum T). */
+void photometricStart(const std::vector<float>& win, int n, int m, double tt, double ts, double& a, double& b)
+{
+  const int wn = n + 2;
+  const double N = double(n) * m;
+  double si = 0, sii = 0;
+  for (int j = 0; j < m; ++j)
+  {
+    const float* w = &win[size_t(j + 1) * wn + 1];
+    for (int i = 0; i < n; ++i)
+    {
+      si += w[i];
+      sii += double(w[i]) * w[i];
+    }
+  }
+  const double mi = si / N, mt = ts / N;
+  const double vi = std::max(sii / N - mi * mi, 0.0), vt = std::max(tt / N - mt * mt, 1e-12);
+  a = std::sqrt(vi / vt);
+  b = mi - a * mt;
+}
+}  // namespace
+
 bool refineTranslation(const cv::Mat& grey, const cv::Mat& T, Vec2& uv, int maxIter,
                        std::vector<float>& win)
 {
-  const int n = T.cols, m = T.rows, htx = n / 2, hty = m / 2;
+  const int n = T.cols, m = T.rows;
   const int wn = n + 2, wm = m + 2;  // one extra pixel each side for the gradients
   win.resize(size_t(wn) * wm);
   // Constant blocks of J^T J: sum T^2, sum T, number of pixels.
@@ -58,37 +105,8 @@ bool refineTranslation(const cv::Mat& grey, const cv::Mat& T, Vec2& uv, int maxI
   double a = 1, b = 0;
   for (int it = 0; it < maxIter; ++it)
   {
-    const double flx = std::floor(p.x()), fly = std::floor(p.y());
-    const int left = int(flx) - htx - 1, top = int(fly) - hty - 1;
-    if (left < 0 || top < 0 || left + wn >= grey.cols || top + wm >= grey.rows) return false;
-    const float fx = float(p.x() - flx), fy = float(p.y() - fly);
-    const float w00 = (1 - fx) * (1 - fy), w01 = fx * (1 - fy), w10 = (1 - fx) * fy, w11 = fx * fy;
-    for (int j = 0; j < wm; ++j)
-    {
-      const std::uint8_t* r0 = grey.ptr<std::uint8_t>(top + j) + left;
-      const std::uint8_t* r1 = grey.ptr<std::uint8_t>(top + j + 1) + left;
-      float* w = &win[size_t(j) * wn];
-      for (int i = 0; i < wn; ++i)
-        w[i] = w00 * r0[i] + w01 * r0[i + 1] + w10 * r1[i] + w11 * r1[i + 1];
-    }
-    if (it == 0)
-    {
-      // Photometric start: match the window's mean and standard deviation.
-      double si = 0, sii = 0;
-      for (int j = 0; j < m; ++j)
-      {
-        const float* w = &win[size_t(j + 1) * wn + 1];
-        for (int i = 0; i < n; ++i)
-        {
-          si += w[i];
-          sii += double(w[i]) * w[i];
-        }
-      }
-      const double mi = si / N, mt = ts / N;
-      const double vi = std::max(sii / N - mi * mi, 0.0), vt = std::max(tt / N - mt * mt, 1e-12);
-      a = std::sqrt(vi / vt);
-      b = mi - a * mt;
-    }
+    if (!sampleWindow(grey, p, n, m, win)) return false;
+    if (it == 0) photometricStart(win, n, m, tt, ts, a, b);  // match the window's mean and deviation
     // Normal equations of r = I(p + x) - a T(x) - b in (p, a, b); J = [dI/du, dI/dv, -T, -1].
     double gxx = 0, gxy = 0, gyy = 0, gxt = 0, gyt = 0, gx1 = 0, gy1 = 0;  // J^T J
     double rx = 0, ry = 0, rt = 0, r1 = 0;                                 // J^T r

@@ -56,18 +56,12 @@ void crossRow(float* acc, const float* src, const float* t, int n, int L)
       return crossRowAny(acc, src, t, n, L);
   }
 }
-}  // namespace
 
-void znccScoreRows(const cv::Mat& grey, const cv::Mat& templ, int sx0, int sy0, int sx1, int sy1,
-                   const std::vector<int>& lo, const std::vector<int>& hi, TSearchWorkspace& ws)
+/** The zero-mean template T' into ws.zeroMeanTemplate; returns sum T'^2. Then
+ * sum_x I T' = sum_x (I - mean I) T'. */
+double zeroMeanTemplate(const cv::Mat& templ, TSearchWorkspace& ws)
 {
-  const int n = templ.cols, m = templ.rows, htx = n / 2, hty = m / 2;
-  const int N = n * m;
-  const int mapW = sx1 - sx0 + 1, mapH = sy1 - sy0 + 1;
-  const int RW = mapW + 2 * htx, RH = mapH + 2 * hty;  // the image ROI under the box
-  const int left = sx0 - htx, top = sy0 - hty;
-
-  // Zero-mean template T' and sum T'^2: then sum_x I T' = sum_x (I - mean I) T'.
+  const int n = templ.cols, m = templ.rows, N = n * m;
   ws.zeroMeanTemplate.resize(size_t(N));
   double tsum = 0;
   for (int j = 0; j < m; ++j)
@@ -84,8 +78,13 @@ void znccScoreRows(const cv::Mat& grey, const cv::Mat& templ, int sx0, int sy0, 
       ws.zeroMeanTemplate[size_t(j * n + i)] = float(t);
       t2 += t * t;
     }
+  return t2;
+}
 
-  // ROI as float and exact integral images of I and I^2 (8-bit input: integer sums).
+/** The RW x RH image ROI at (left, top) as float (ws.roiFloat) and the exact integral images of I
+ * and I^2 (ws.integral, ws.integralSq; 8-bit input: integer sums), RW + 1 columns each. */
+void roiIntegrals(const cv::Mat& grey, int left, int top, int RW, int RH, TSearchWorkspace& ws)
+{
   ws.roiFloat.resize(size_t(RW) * RH);
   const size_t IW = size_t(RW) + 1;
   ws.integral.assign(IW * (RH + 1), 0);
@@ -109,6 +108,22 @@ void znccScoreRows(const cv::Mat& grey, const cv::Mat& templ, int sx0, int sy0, 
       cur2[i + 1] = up2[i + 1] + rs2;
     }
   }
+}
+}  // namespace
+
+void znccScoreRows(const cv::Mat& grey, const cv::Mat& templ, int sx0, int sy0, int sx1, int sy1,
+                   const std::vector<int>& lo, const std::vector<int>& hi, TSearchWorkspace& ws)
+{
+  const int n = templ.cols, m = templ.rows, htx = n / 2, hty = m / 2;
+  const int N = n * m;
+  const int mapW = sx1 - sx0 + 1, mapH = sy1 - sy0 + 1;
+  const int RW = mapW + 2 * htx, RH = mapH + 2 * hty;  // the image ROI under the box
+  const int left = sx0 - htx, top = sy0 - hty;
+
+  const double t2 = zeroMeanTemplate(templ, ws);
+
+  roiIntegrals(grey, left, top, RW, RH, ws);
+  const size_t IW = size_t(RW) + 1;
 
   // The score map is a header over a growing buffer: no allocation once the buffer is big enough.
   if (ws.scoreBuffer.size() < size_t(mapW) * mapH) ws.scoreBuffer.resize(size_t(mapW) * mapH);

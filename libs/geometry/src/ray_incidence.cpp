@@ -83,19 +83,13 @@ Eigen::Matrix<double, 5, 1> concurrencyDistance(const Vec6& Li, const Vec6& Lj, 
   return d;
 }
 
-TRayIncidenceTest threeRaysMeet(const TUncertainLine3& ray1, const TUncertainLine3& ray2,
-                                const TUncertainLine3& ray3, double alpha, const MatX* cov_rays)
+namespace
 {
-  if (cov_rays && (cov_rays->rows() != 18 || cov_rays->cols() != 18))
-    throw std::invalid_argument(
-        "immslam/geometry/ray_incidence.cpp: threeRaysMeet needs an 18x18 joint covariance of the rays");
-  if (!(alpha > 0 && alpha < 1))
-    throw std::invalid_argument("immslam/geometry/ray_incidence.cpp: threeRaysMeet needs 0 < alpha < 1");
-
-  const TUncertainLine3* rays[3] = {&ray1, &ray2, &ray3};
-  // Joint covariance of the three rays, then spherical normalization of each (with the Plücker
-  // tangent projection of TUncertainLine3::normalized()).
-  MatX S(18, 18);
+/** The rays spherically normalized into l (with the Plücker tangent projection of
+ * TUncertainLine3::normalized()) and their joint 18x18 covariance after it into S (`cov_rays`,
+ * else the rays' own blocks). */
+void normalizeRays(const TUncertainLine3* const rays[3], const MatX* cov_rays, Vec6 l[3], MatX& S)
+{
   if (cov_rays)
     S = *cov_rays;
   else
@@ -103,7 +97,6 @@ TRayIncidenceTest threeRaysMeet(const TUncertainLine3& ray1, const TUncertainLin
     S.setZero();
     for (int r = 0; r < 3; ++r) S.block<6, 6>(6 * r, 6 * r) = rays[r]->cov;
   }
-  Vec6 l[3];
   MatX Jn = MatX::Zero(18, 18);
   for (int r = 0; r < 3; ++r)
   {
@@ -113,9 +106,12 @@ TRayIncidenceTest threeRaysMeet(const TUncertainLine3& ray1, const TUncertainLin
     Jn.block<6, 6>(6 * r, 6 * r) = (Mat6::Identity() - dl * dl.transpose()) * J;
   }
   S = Jn * S * Jn.transpose();
+}
 
-  // The pair with the widest angle between directions forms the intersection point.
-  TRayIncidenceTest out;
+/** The pair with the widest angle between directions (it forms the intersection point) into
+ * out.pair, the other ray into out.third. */
+void widestPair(const Vec6 l[3], TRayIncidenceTest& out)
+{
   double best = -1;
   for (int a = 0; a < 3; ++a)
     for (int b = a + 1; b < 3; ++b)
@@ -130,6 +126,24 @@ TRayIncidenceTest threeRaysMeet(const TUncertainLine3& ray1, const TUncertainLin
         out.third = 3 - a - b;
       }
     }
+}
+}  // namespace
+
+TRayIncidenceTest threeRaysMeet(const TUncertainLine3& ray1, const TUncertainLine3& ray2,
+                                const TUncertainLine3& ray3, double alpha, const MatX* cov_rays)
+{
+  if (cov_rays && (cov_rays->rows() != 18 || cov_rays->cols() != 18))
+    throw std::invalid_argument(
+        "immslam/geometry/ray_incidence.cpp: threeRaysMeet needs an 18x18 joint covariance of the rays");
+  if (!(alpha > 0 && alpha < 1))
+    throw std::invalid_argument("immslam/geometry/ray_incidence.cpp: threeRaysMeet needs 0 < alpha < 1");
+
+  const TUncertainLine3* rays[3] = {&ray1, &ray2, &ray3};
+  Vec6 l[3];
+  MatX S(18, 18);
+  normalizeRays(rays, cov_rays, l, S);
+  TRayIncidenceTest out;
+  widestPair(l, out);
   const int i = out.pair[0], j = out.pair[1], k = out.third;
 
   Eigen::Matrix<double, 5, 6> Ji, Jj, Jk;

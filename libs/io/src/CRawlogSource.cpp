@@ -259,7 +259,50 @@ struct CRawlogSource::Impl
     if (!damage.empty()) what += " (then: " + damage + ")";
     throw std::runtime_error("rawlog " + path + " " + what + ": nothing to process");
   }
+
+  /** The next item that is not ground truth (read from the file as needed); false at the end
+   * (`why`: the damage, or "" at the normal end). */
+  bool nextItem(TItem& it, std::string& why);
 };
+
+bool CRawlogSource::Impl::nextItem(TItem& it, std::string& why)
+{
+  for (;;)
+  {
+    while (pending.empty())
+    {
+      if (ended)
+      {
+        why = endWhy;
+        return false;
+      }
+      if (!damage.empty() && reader->entries() >= firstPassEntries)
+      {
+        // Stop where the first pass found the damage (the same place, whatever the reader does).
+        ended = true;
+        endWhy = damage;
+        reader.reset();
+        continue;
+      }
+      mrpt::serialization::CSerializable::Ptr obj;
+      std::string err;
+      const auto res = reader->read(obj, err);
+      if (res == detail::CRawlogReader::EResult::Object)
+      {
+        bool sf = false;
+        expandEntry(obj, reader->entries() - 1, pending, sf);
+        continue;
+      }
+      ended = true;
+      if (res == detail::CRawlogReader::EResult::Damage)
+        endWhy = damageReport(reader->entries(), err);
+      reader.reset();  // releases the file
+    }
+    it = std::move(pending.front());
+    pending.pop_front();
+    if (!(it.obs && isGroundTruth(*it.obs))) return true;  // ground truth: consumed silently
+  }
+}
 
 CRawlogSource::CRawlogSource(const std::string& path, const std::string& sensorLabel) : m_impl(std::make_unique<Impl>())
 {
@@ -302,41 +345,7 @@ ENextStatus CRawlogSource::next(TFrame& frame, std::string& why)
   try
   {
     TItem it;
-    for (;;)
-    {
-      while (m.pending.empty())
-      {
-        if (m.ended)
-        {
-          why = m.endWhy;
-          return ENextStatus::End;
-        }
-        if (!m.damage.empty() && m.reader->entries() >= m.firstPassEntries)
-        {
-          // Stop where the first pass found the damage (the same place, whatever the reader does).
-          m.ended = true;
-          m.endWhy = m.damage;
-          m.reader.reset();
-          continue;
-        }
-        mrpt::serialization::CSerializable::Ptr obj;
-        std::string err;
-        const auto res = m.reader->read(obj, err);
-        if (res == detail::CRawlogReader::EResult::Object)
-        {
-          bool sf = false;
-          expandEntry(obj, m.reader->entries() - 1, m.pending, sf);
-          continue;
-        }
-        m.ended = true;
-        if (res == detail::CRawlogReader::EResult::Damage)
-          m.endWhy = m.damageReport(m.reader->entries(), err);
-        m.reader.reset();  // releases the file
-      }
-      it = std::move(m.pending.front());
-      m.pending.pop_front();
-      if (!(it.obs && isGroundTruth(*it.obs))) break;  // ground truth: consumed silently
-    }
+    if (!m.nextItem(it, why)) return ENextStatus::End;
 
     const std::size_t index = m.nextIndex++;
     const std::string origin = originOf(it);

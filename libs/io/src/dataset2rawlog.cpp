@@ -99,15 +99,12 @@ mrpt::obs::CObservationRobotPose::Ptr makeGroundTruth(const core::TStampedPose& 
   for (int i = 0; i < 6; ++i) o->pose.cov(i, i) = 1e-6;
   return o;
 }
-}  // namespace
-
-TDataset2RawlogResult convertDatasetToRawlog(
-    const std::string& folder, const std::string& outRawlog, const TDataset2RawlogOptions& opts)
+/** The calibration stored with every image: the folder's calib.txt as MRPT's TCamera, or all
+ * zero ("no calibration" for CRawlogSource) with a warning in `res`. */
+mrpt::img::TCamera storedCalibration(const CDatasetFolderSource& src, const std::string& folder,
+                                     TDataset2RawlogResult& res)
 {
-  TDataset2RawlogResult res;
-  CDatasetFolderSource src(folder);  // throws naming rgb.txt / calib.txt / groundtruth.txt
-
-  mrpt::img::TCamera tcam;  // default: all zero = "no calibration" for CRawlogSource
+  mrpt::img::TCamera tcam;
   const std::string calibFile = (fs::path(folder) / "calib.txt").string();
   if (const auto cam = src.calibration())
   {
@@ -124,9 +121,14 @@ TDataset2RawlogResult convertDatasetToRawlog(
   }
   else
     res.warnings.push_back("no " + calibFile + ": cameraParams left empty (run with --calib FILE)");
+  return tcam;
+}
 
-  const auto& entries = src.entries();
-  const core::TTrajectory gt = src.groundTruth().value_or(core::TTrajectory{});
+/** The folder's images (those rgb.txt lists without error; the others counted as skipped in `res`)
+ * and ground-truth poses in time order, ground truth first at equal times. */
+std::vector<TEvent> timeOrderedEvents(const std::vector<TDatasetEntry>& entries, const core::TTrajectory& gt,
+                                      TDataset2RawlogResult& res)
+{
   std::vector<TEvent> events;
   events.reserve(entries.size() + gt.size());
   for (std::size_t i = 0; i < entries.size(); ++i)
@@ -143,6 +145,58 @@ TDataset2RawlogResult convertDatasetToRawlog(
   std::stable_sort(events.begin(), events.end(), [](const TEvent& a, const TEvent& b) {
     return a.t < b.t || (a.t == b.t && a.kind < b.kind);
   });
+  return events;
+}
+/** The observation of image entry `e` (its image embedded, or referenced by its file name relative
+ * to `outDir`); null when the image is unreadable or missing (warning counted in `res`). */
+mrpt::obs::CObservationImage::Ptr imageObservation(const CDatasetFolderSource& src, const TDatasetEntry& e,
+                                                   const mrpt::img::TCamera& tcam, bool embed, const fs::path& outDir,
+                                                   TDataset2RawlogResult& res)
+{
+  std::error_code ec;
+  const std::string file = src.imagePath(e);
+  auto obs = mrpt::obs::CObservationImage::Create();
+  obs->sensorLabel = "CAMERA";
+  obs->timestamp = mrpt::Clock::fromDouble(e.timestamp);
+  obs->cameraParams = tcam;
+  if (embed)
+  {
+    TFrame fr;
+    std::string why;
+    if (!detail::loadFrameImages(file, fr, why))
+    {
+      res.warnings.push_back("skipped: " + why + " (rgb.txt:" + std::to_string(e.line) + ")");
+      ++res.nSkipped;
+      return nullptr;
+    }
+    obs->image = mrpt::img::CImage(fr.colour.empty() ? fr.grey : fr.colour, mrpt::img::SHALLOW_COPY);
+  }
+  else
+  {
+    if (!fs::is_regular_file(file, ec))
+    {
+      res.warnings.push_back(
+          "skipped: missing image file " + file + " (rgb.txt:" + std::to_string(e.line) + ")");
+      ++res.nSkipped;
+      return nullptr;
+    }
+    obs->image.setExternalStorage(externalName(file, outDir));
+  }
+  return obs;
+}
+}  // namespace
+
+TDataset2RawlogResult convertDatasetToRawlog(
+    const std::string& folder, const std::string& outRawlog, const TDataset2RawlogOptions& opts)
+{
+  TDataset2RawlogResult res;
+  CDatasetFolderSource src(folder);  // throws naming rgb.txt / calib.txt / groundtruth.txt
+
+  const mrpt::img::TCamera tcam = storedCalibration(src, folder, res);
+
+  const auto& entries = src.entries();
+  const core::TTrajectory gt = src.groundTruth().value_or(core::TTrajectory{});
+  const std::vector<TEvent> events = timeOrderedEvents(entries, gt, res);
 
   std::error_code ec;
   fs::path outDir = fs::absolute(outRawlog).parent_path();
@@ -178,35 +232,8 @@ TDataset2RawlogResult convertDatasetToRawlog(
         ++res.nGroundTruth;
         continue;
       }
-      const TDatasetEntry& e = entries[ev.idx];
-      const std::string file = src.imagePath(e);
-      auto obs = mrpt::obs::CObservationImage::Create();
-      obs->sensorLabel = "CAMERA";
-      obs->timestamp = mrpt::Clock::fromDouble(e.timestamp);
-      obs->cameraParams = tcam;
-      if (opts.embedImages)
-      {
-        TFrame fr;
-        std::string why;
-        if (!detail::loadFrameImages(file, fr, why))
-        {
-          res.warnings.push_back("skipped: " + why + " (rgb.txt:" + std::to_string(e.line) + ")");
-          ++res.nSkipped;
-          continue;
-        }
-        obs->image = mrpt::img::CImage(fr.colour.empty() ? fr.grey : fr.colour, mrpt::img::SHALLOW_COPY);
-      }
-      else
-      {
-        if (!fs::is_regular_file(file, ec))
-        {
-          res.warnings.push_back(
-              "skipped: missing image file " + file + " (rgb.txt:" + std::to_string(e.line) + ")");
-          ++res.nSkipped;
-          continue;
-        }
-        obs->image.setExternalStorage(externalName(file, outDir));
-      }
+      const auto obs = imageObservation(src, entries[ev.idx], tcam, opts.embedImages, outDir, res);
+      if (!obs) continue;
       write(obs);
       ++res.nImages;
     }

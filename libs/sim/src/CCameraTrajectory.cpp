@@ -68,43 +68,7 @@ Mat3 rightJacobian(const Vec3& e)
 
 CCameraTrajectory::CCameraTrajectory(const TScenario& sc) : m_fps(sc.fps)
 {
-  // Merge consecutive segments of one type, then place the ramps inside the more-moving segment.
-  double t = 0;
-  for (const auto& s : sc.segments)
-  {
-    if (!m_spans.empty() && m_spans.back().type == s.type)
-      m_spans.back().t1 = t + s.duration_s;
-    else
-      m_spans.push_back({s.type, t, t + s.duration_s, 0, 0, 0, 0, 0, 0});
-    t += s.duration_s;
-  }
-  double vClock = 0, wClock = 0;
-  for (std::size_t i = 0; i < m_spans.size(); ++i)
-  {
-    auto& sp = m_spans[i];
-    const EMotionLabel prev = i > 0 ? m_spans[i - 1].type : EMotionLabel::Stationary;  // starts at rest
-    const bool hasNext = i + 1 < m_spans.size();
-    const EMotionLabel next = hasNext ? m_spans[i + 1].type : sp.type;
-    const double dur = sp.t1 - sp.t0;
-    if (sp.type == EMotionLabel::General)
-    {
-      const int n = 1 + (hasNext ? 1 : 0);
-      sp.vIn = std::min(sc.ramp_s, dur / n);
-      sp.vOut = hasNext ? sp.vIn : 0.0;
-    }
-    if (sp.type != EMotionLabel::Stationary)
-    {
-      const bool in = prev == EMotionLabel::Stationary, out = hasNext && next == EMotionLabel::Stationary;
-      const int n = (in ? 1 : 0) + (out ? 1 : 0);
-      const double r = n ? std::min(sc.ramp_s, dur / n) : 0.0;
-      sp.wIn = in ? r : 0.0;
-      sp.wOut = out ? r : 0.0;
-    }
-    sp.vClock0 = vClock;
-    sp.wClock0 = wClock;
-    if (sp.type == EMotionLabel::General) vClock += gateIntegral(sp.t1, sp.t0, sp.t1, sp.vIn, sp.vOut);
-    if (sp.type != EMotionLabel::Stationary) wClock += gateIntegral(sp.t1, sp.t0, sp.t1, sp.wIn, sp.wOut);
-  }
+  buildSpans(sc);
 
   // Hand-held paths, from the camera's own random stream.
   CRandom rng(CRandom::streamSeed(sc.seed, "camera-path"));
@@ -150,6 +114,47 @@ CCameraTrajectory::CCameraTrajectory(const TScenario& sc) : m_fps(sc.fps)
                                               : EMotionLabel::Stationary);
     prevV = cv;
     prevW = cw;
+  }
+}
+
+void CCameraTrajectory::buildSpans(const TScenario& sc)
+{
+  // Merge consecutive segments of one type, then place the ramps inside the more-moving segment.
+  double t = 0;
+  for (const auto& s : sc.segments)
+  {
+    if (!m_spans.empty() && m_spans.back().type == s.type)
+      m_spans.back().t1 = t + s.duration_s;
+    else
+      m_spans.push_back({s.type, t, t + s.duration_s, 0, 0, 0, 0, 0, 0});
+    t += s.duration_s;
+  }
+  double vClock = 0, wClock = 0;
+  for (std::size_t i = 0; i < m_spans.size(); ++i)
+  {
+    auto& sp = m_spans[i];
+    const EMotionLabel prev = i > 0 ? m_spans[i - 1].type : EMotionLabel::Stationary;  // starts at rest
+    const bool hasNext = i + 1 < m_spans.size();
+    const EMotionLabel next = hasNext ? m_spans[i + 1].type : sp.type;
+    const double dur = sp.t1 - sp.t0;
+    if (sp.type == EMotionLabel::General)
+    {
+      const int n = 1 + (hasNext ? 1 : 0);
+      sp.vIn = std::min(sc.ramp_s, dur / n);
+      sp.vOut = hasNext ? sp.vIn : 0.0;
+    }
+    if (sp.type != EMotionLabel::Stationary)
+    {
+      const bool in = prev == EMotionLabel::Stationary, out = hasNext && next == EMotionLabel::Stationary;
+      const int n = (in ? 1 : 0) + (out ? 1 : 0);
+      const double r = n ? std::min(sc.ramp_s, dur / n) : 0.0;
+      sp.wIn = in ? r : 0.0;
+      sp.wOut = out ? r : 0.0;
+    }
+    sp.vClock0 = vClock;
+    sp.wClock0 = wClock;
+    if (sp.type == EMotionLabel::General) vClock += gateIntegral(sp.t1, sp.t0, sp.t1, sp.vIn, sp.vOut);
+    if (sp.type != EMotionLabel::Stationary) wClock += gateIntegral(sp.t1, sp.t0, sp.t1, sp.wIn, sp.wOut);
   }
 }
 

@@ -252,16 +252,8 @@ std::optional<TRayHit> CRenderer::raycast(const std::vector<TBox>& boxes, const 
   return r;
 }
 
-TRenderedImages CRenderer::render(const CWorld& world, const std::vector<TBox>& boxes, const TPose& T_W_C,
-                                  const TRenderOptions& opts) const
+std::vector<std::uint64_t> CRenderer::tileCandidates(const std::vector<TInstance>& inst) const
 {
-  const auto inst = prepare(boxes, T_W_C);
-  const auto& surfaces = world.surfaces();
-  for (const auto& I : inst)
-    if (I.firstSurface < 0 || I.firstSurface + 6 > static_cast<int>(surfaces.size()))
-      throw std::runtime_error("CRenderer: box surfaces out of range");
-
-  // Per-tile candidate boxes (bit i = box i; the room is always the fallback).
   std::vector<std::uint64_t> tileBits(m_tileAxis.size(), 0);
   for (std::size_t t = 0; t < tileBits.size(); ++t)
     for (std::size_t i = 1; i < inst.size(); ++i)
@@ -273,6 +265,54 @@ TRenderedImages CRenderer::render(const CWorld& world, const std::vector<TBox>& 
         cand = angleBetween(m_tileAxis[t], I.sphere_C) <= m_tileHalfAngle[t] + std::asin(I.radius / dist) + 1e-6;
       if (cand) tileBits[t] |= 1ULL << i;
     }
+  return tileBits;
+}
+
+cv::Mat CRenderer::quantized(const cv::Mat& value, bool colour, const TRenderOptions& opts) const
+{
+  const int ch = colour ? 3 : 1;
+  cv::Mat img(m_h, m_w, colour ? CV_8UC3 : CV_8UC1);
+  parallelRows(m_h, m_threads, [&](int y0, int y1) {
+    for (int v = y0; v < y1; ++v)
+    {
+      const float* vrow = value.ptr<float>(v);
+      std::uint8_t* orow = img.ptr<std::uint8_t>(v);
+      if (opts.noise_sigma_grey > 0)
+      {
+        CRandom rng(CRandom::streamSeed(opts.noise_seed, "pixel-noise-row", static_cast<std::uint64_t>(v)));
+        const float sigma = static_cast<float>(opts.noise_sigma_grey);
+        std::uint64_t bits = 0;
+        int left = 0;
+        for (int i = 0; i < m_w * ch; ++i)
+        {
+          if (left == 0)
+          {
+            bits = rng.next();
+            left = 64 / kNoiseBits;
+          }
+          const float n = m_noiseTable[bits & ((1u << kNoiseBits) - 1)];
+          bits >>= kNoiseBits;
+          --left;
+          orow[i] = quantize(vrow[i] + sigma * n);
+        }
+      }
+      else
+        for (int i = 0; i < m_w * ch; ++i) orow[i] = quantize(vrow[i]);
+    }
+  });
+  return img;
+}
+
+TRenderedImages CRenderer::render(const CWorld& world, const std::vector<TBox>& boxes, const TPose& T_W_C,
+                                  const TRenderOptions& opts) const
+{
+  const auto inst = prepare(boxes, T_W_C);
+  const auto& surfaces = world.surfaces();
+  for (const auto& I : inst)
+    if (I.firstSurface < 0 || I.firstSurface + 6 > static_cast<int>(surfaces.size()))
+      throw std::runtime_error("CRenderer: box surfaces out of range");
+
+  const std::vector<std::uint64_t> tileBits = tileCandidates(inst);
 
   TRenderedImages out;
   out.mask.create(m_h, m_w, CV_8UC1);
@@ -322,36 +362,7 @@ TRenderedImages CRenderer::render(const CWorld& world, const std::vector<TBox>& 
 
   if (opts.blur_sigma_px > 0) cv::GaussianBlur(value, value, cv::Size(0, 0), opts.blur_sigma_px, 0, cv::BORDER_REFLECT);
 
-  const int ch = colour ? 3 : 1;
-  cv::Mat img(m_h, m_w, colour ? CV_8UC3 : CV_8UC1);
-  parallelRows(m_h, m_threads, [&](int y0, int y1) {
-    for (int v = y0; v < y1; ++v)
-    {
-      const float* vrow = value.ptr<float>(v);
-      std::uint8_t* orow = img.ptr<std::uint8_t>(v);
-      if (opts.noise_sigma_grey > 0)
-      {
-        CRandom rng(CRandom::streamSeed(opts.noise_seed, "pixel-noise-row", static_cast<std::uint64_t>(v)));
-        const float sigma = static_cast<float>(opts.noise_sigma_grey);
-        std::uint64_t bits = 0;
-        int left = 0;
-        for (int i = 0; i < m_w * ch; ++i)
-        {
-          if (left == 0)
-          {
-            bits = rng.next();
-            left = 64 / kNoiseBits;
-          }
-          const float n = m_noiseTable[bits & ((1u << kNoiseBits) - 1)];
-          bits >>= kNoiseBits;
-          --left;
-          orow[i] = quantize(vrow[i] + sigma * n);
-        }
-      }
-      else
-        for (int i = 0; i < m_w * ch; ++i) orow[i] = quantize(vrow[i]);
-    }
-  });
+  const cv::Mat img = quantized(value, colour, opts);
   if (colour)
   {
     out.colour = img;

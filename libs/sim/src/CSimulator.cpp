@@ -47,6 +47,61 @@ std::ofstream openText(const std::filesystem::path& p)
   if (!f) throw std::runtime_error("cannot write '" + p.string() + "'");
   return f;
 }
+/** A point of CSimulator::writePointTracks(): on the static world (object 0, world frame) or on a
+ * moving object (its frame). */
+struct TTrackPoint
+{
+  int object = 0;
+  Vec3 p = Vec3::Zero();
+};
+
+/** The pose T_W_O of moving object `object` at frame k; false when it is not in the scene then. */
+bool objectPoseAt(const CSimulator& sim, std::size_t k, int object, TPose& T)
+{
+  for (const auto& o : sim.objectPoses(k))
+    if (o.id == object)
+    {
+      T = o.T_W_O;
+      return true;
+    }
+  return false;
+}
+
+/** The points of CSimulator::writePointTracks(): where random rays of random frames (of the first
+ * n) hit, opts.staticPoints on the static world and opts.pointsPerObject on each moving object;
+ * `have` counts them by object id (0: static world). */
+std::vector<TTrackPoint> sampleTrackPoints(const CSimulator& sim, std::size_t n, const TPointTrackOptions& opts,
+                                           const std::vector<TMovingObjectSpec>& objects, CRandom& rng,
+                                           std::map<int, int>& have)
+{
+  const auto& cam = *sim.scenario().camera;
+  std::vector<TTrackPoint> points;
+  std::map<int, int> wanted{{0, opts.staticPoints}};
+  have = {{0, 0}};
+  for (const auto& o : objects) wanted[o.id] = opts.pointsPerObject, have[o.id] = 0;
+  const int total = opts.staticPoints + opts.pointsPerObject * static_cast<int>(objects.size());
+  for (int attempt = 0; attempt < 200 * std::max(total, 1) && static_cast<int>(points.size()) < total; ++attempt)
+  {
+    const auto k = static_cast<std::size_t>(rng.uniformInt(0, static_cast<int>(n) - 1));
+    const Vec2 uv(rng.uniform(0, cam.width()), rng.uniform(0, cam.height()));
+    const auto hit = sim.raycast(k, uv);
+    if (!hit || !wanted.count(hit->objectId)) continue;
+    const int j = hit->objectId;
+    if (have[j] >= wanted[j]) continue;
+    TTrackPoint p;
+    p.object = j;
+    p.p = hit->p_W;
+    TPose T;
+    if (j > 0)
+    {
+      if (!objectPoseAt(sim, k, j, T)) continue;
+      p.p = math::quatRotate(math::quatConjugate(T.q), hit->p_W - T.t);
+    }
+    points.push_back(p);
+    ++have[j];
+  }
+  return points;
+}
 }  // namespace
 
 CSimulator::CSimulator(TScenario scenario)
@@ -154,46 +209,9 @@ std::size_t CSimulator::writePointTracks(const std::string& path, std::size_t n,
     throw std::runtime_error("point tracks: counts must be >= 0 and the noise a finite number >= 0");
   const auto& cam = *m_sc.camera;
   CRandom rng(m_sc.seed * 0x9E3779B97F4A7C15ULL + 0x70696e7473ULL);  // its own stream of the scenario's seed
-  const auto poseOf = [this](std::size_t k, int object, TPose& T) {
-    for (const auto& o : objectPoses(k))
-      if (o.id == object)
-      {
-        T = o.T_W_O;
-        return true;
-      }
-    return false;
-  };
-  // The points: where random rays of random frames hit (static: world frame; moving: object frame).
-  struct TPoint
-  {
-    int object = 0;
-    Vec3 p = Vec3::Zero();
-  };
-  std::vector<TPoint> points;
   const auto& objects = m_world.movingObjects();
-  std::map<int, int> wanted{{0, opts.staticPoints}}, have{{0, 0}};  // by object id (0: static world)
-  for (const auto& o : objects) wanted[o.id] = opts.pointsPerObject, have[o.id] = 0;
-  const int total = opts.staticPoints + opts.pointsPerObject * static_cast<int>(objects.size());
-  for (int attempt = 0; attempt < 200 * std::max(total, 1) && static_cast<int>(points.size()) < total; ++attempt)
-  {
-    const auto k = static_cast<std::size_t>(rng.uniformInt(0, static_cast<int>(n) - 1));
-    const Vec2 uv(rng.uniform(0, cam.width()), rng.uniform(0, cam.height()));
-    const auto hit = raycast(k, uv);
-    if (!hit || !wanted.count(hit->objectId)) continue;
-    const int j = hit->objectId;
-    if (have[j] >= wanted[j]) continue;
-    TPoint p;
-    p.object = j;
-    p.p = hit->p_W;
-    TPose T;
-    if (j > 0)
-    {
-      if (!poseOf(k, j, T)) continue;
-      p.p = math::quatRotate(math::quatConjugate(T.q), hit->p_W - T.t);
-    }
-    points.push_back(p);
-    ++have[j];
-  }
+  std::map<int, int> have;  // points by object id (0: static world)
+  const std::vector<TTrackPoint> points = sampleTrackPoints(*this, n, opts, objects, rng, have);
   std::ofstream f(path);
   if (!f) throw std::runtime_error("cannot write " + path);
   f << "# point tracks rendered by imm-render from " << m_sc.origin << " (seed " << m_sc.seed << "): "
@@ -207,12 +225,12 @@ std::size_t CSimulator::writePointTracks(const std::string& path, std::size_t n,
     const auto T_W_C = cameraPose(k);
     for (std::size_t i = 0; i < points.size(); ++i)
     {
-      const TPoint& pt = points[i];
+      const TTrackPoint& pt = points[i];
       Vec3 p_W = pt.p;
       TPose T;
       if (pt.object > 0)
       {
-        if (!poseOf(k, pt.object, T)) continue;
+        if (!objectPoseAt(*this, k, pt.object, T)) continue;
         p_W = math::quatRotate(T.q, pt.p) + T.t;
       }
       const Vec3 p_C = math::quatRotate(math::quatConjugate(T_W_C.q_W_C), p_W - T_W_C.p_W_C);

@@ -31,6 +31,67 @@ struct TShape
 };
 
 cv::Point toPt(double x, double y) { return cv::Point(static_cast<int>(std::lround(x * 16)), static_cast<int>(std::lround(y * 16))); }
+
+/** Draws shape s at a random place of img (sizes in texels: s.size times tpu), a random grey about
+ * `mean` within `contrast`. */
+void drawShape(cv::Mat& img, const TShape& s, double tpu, double mean, double contrast, CRandom& rng)
+{
+  const int W = img.cols, H = img.rows;
+  const double cx = rng.uniform(0.0, W), cy = rng.uniform(0.0, H);
+  const double a = s.size * tpu * rng.uniform(0.5, 1.0);  // half-extent-ish in texels
+  const double b = s.size * tpu * rng.uniform(0.25, 1.0);
+  const int grey = static_cast<int>(std::clamp(mean + contrast * rng.uniform(-1.0, 1.0), 0.0, 255.0));
+  const cv::Scalar col(grey);
+  if (s.kind < 35)
+  {  // axis-aligned filled rectangle
+    cv::rectangle(img, toPt(cx - a, cy - b), toPt(cx + a, cy + b), col, cv::FILLED, cv::LINE_8, 4);
+  }
+  else if (s.kind < 45)
+  {  // hollow rectangle
+    const int th = std::max(1, static_cast<int>(std::lround(rng.uniform(0.1, 0.3) * std::min(a, b))));
+    cv::rectangle(img, toPt(cx - a, cy - b), toPt(cx + a, cy + b), col, th, cv::LINE_8, 4);
+  }
+  else if (s.kind < 60)
+  {  // rotated rectangle
+    const double ang = rng.uniform(0.0, M_PI);
+    const double c = std::cos(ang), sn = std::sin(ang);
+    cv::Point pts[4];
+    const double dx[4] = {-a, a, a, -a}, dy[4] = {-b, -b, b, b};
+    for (int i = 0; i < 4; ++i) pts[i] = toPt(cx + c * dx[i] - sn * dy[i], cy + sn * dx[i] + c * dy[i]);
+    cv::fillConvexPoly(img, pts, 4, col, cv::LINE_AA, 4);
+  }
+  else if (s.kind < 72)
+  {  // small checkerboard patch
+    const int cells = rng.uniformInt(2, 5);
+    const double cell = 2.0 * a / cells;
+    const int g2 = std::clamp(grey + (grey < 128 ? 1 : -1) * rng.uniformInt(60, 150), 0, 255);
+    for (int i = 0; i < cells; ++i)
+      for (int j = 0; j < cells; ++j)
+      {
+        const double x0 = cx - a + i * cell, y0 = cy - a + j * cell;
+        cv::rectangle(img, toPt(x0, y0), toPt(x0 + cell, y0 + cell), cv::Scalar((i + j) % 2 ? grey : g2),
+                      cv::FILLED, cv::LINE_8, 4);
+      }
+  }
+  else if (s.kind < 88)
+  {  // triangle or quadrilateral with random corners
+    const int nv = rng.uniformInt(3, 4);
+    cv::Point pts[4];
+    const double a0 = rng.uniform(0.0, 2 * M_PI);
+    for (int i = 0; i < nv; ++i)
+    {
+      const double ang = a0 + (2 * M_PI * i) / nv + rng.uniform(-0.5, 0.5);
+      const double rad = a * rng.uniform(0.6, 1.0);
+      pts[i] = toPt(cx + rad * std::cos(ang), cy + rad * std::sin(ang));
+    }
+    cv::fillConvexPoly(img, pts, nv, col, cv::LINE_AA, 4);
+  }
+  else
+  {  // ellipse (a blob)
+    cv::ellipse(img, toPt(cx, cy), cv::Size(static_cast<int>(a * 16), static_cast<int>(b * 16)),
+                rng.uniform(0.0, 180.0), 0, 360, col, cv::FILLED, cv::LINE_AA, 4);
+  }
+}
 }  // namespace
 
 CTexture CTexture::generate(double width, double height, double texelsPerUnit, double shapesPerUnit2,
@@ -67,63 +128,7 @@ CTexture CTexture::generate(double width, double height, double texelsPerUnit, d
   }
   std::stable_sort(shapes.begin(), shapes.end(), [](const TShape& a, const TShape& b) { return a.size > b.size; });
   const double tpu = texelsPerUnit;
-  for (const auto& s : shapes)
-  {
-    const double cx = rng.uniform(0.0, W), cy = rng.uniform(0.0, H);
-    const double a = s.size * tpu * rng.uniform(0.5, 1.0);  // half-extent-ish in texels
-    const double b = s.size * tpu * rng.uniform(0.25, 1.0);
-    const int grey = static_cast<int>(std::clamp(mean + contrast * rng.uniform(-1.0, 1.0), 0.0, 255.0));
-    const cv::Scalar col(grey);
-    if (s.kind < 35)
-    {  // axis-aligned filled rectangle
-      cv::rectangle(img, toPt(cx - a, cy - b), toPt(cx + a, cy + b), col, cv::FILLED, cv::LINE_8, 4);
-    }
-    else if (s.kind < 45)
-    {  // hollow rectangle
-      const int th = std::max(1, static_cast<int>(std::lround(rng.uniform(0.1, 0.3) * std::min(a, b))));
-      cv::rectangle(img, toPt(cx - a, cy - b), toPt(cx + a, cy + b), col, th, cv::LINE_8, 4);
-    }
-    else if (s.kind < 60)
-    {  // rotated rectangle
-      const double ang = rng.uniform(0.0, M_PI);
-      const double c = std::cos(ang), sn = std::sin(ang);
-      cv::Point pts[4];
-      const double dx[4] = {-a, a, a, -a}, dy[4] = {-b, -b, b, b};
-      for (int i = 0; i < 4; ++i) pts[i] = toPt(cx + c * dx[i] - sn * dy[i], cy + sn * dx[i] + c * dy[i]);
-      cv::fillConvexPoly(img, pts, 4, col, cv::LINE_AA, 4);
-    }
-    else if (s.kind < 72)
-    {  // small checkerboard patch
-      const int cells = rng.uniformInt(2, 5);
-      const double cell = 2.0 * a / cells;
-      const int g2 = std::clamp(grey + (grey < 128 ? 1 : -1) * rng.uniformInt(60, 150), 0, 255);
-      for (int i = 0; i < cells; ++i)
-        for (int j = 0; j < cells; ++j)
-        {
-          const double x0 = cx - a + i * cell, y0 = cy - a + j * cell;
-          cv::rectangle(img, toPt(x0, y0), toPt(x0 + cell, y0 + cell), cv::Scalar((i + j) % 2 ? grey : g2),
-                        cv::FILLED, cv::LINE_8, 4);
-        }
-    }
-    else if (s.kind < 88)
-    {  // triangle or quadrilateral with random corners
-      const int nv = rng.uniformInt(3, 4);
-      cv::Point pts[4];
-      const double a0 = rng.uniform(0.0, 2 * M_PI);
-      for (int i = 0; i < nv; ++i)
-      {
-        const double ang = a0 + (2 * M_PI * i) / nv + rng.uniform(-0.5, 0.5);
-        const double rad = a * rng.uniform(0.6, 1.0);
-        pts[i] = toPt(cx + rad * std::cos(ang), cy + rad * std::sin(ang));
-      }
-      cv::fillConvexPoly(img, pts, nv, col, cv::LINE_AA, 4);
-    }
-    else
-    {  // ellipse (a blob)
-      cv::ellipse(img, toPt(cx, cy), cv::Size(static_cast<int>(a * 16), static_cast<int>(b * 16)),
-                  rng.uniform(0.0, 180.0), 0, 360, col, cv::FILLED, cv::LINE_AA, 4);
-    }
-  }
+  for (const auto& s : shapes) drawShape(img, s, tpu, mean, contrast, rng);
 
   // 3. Fine grain (per-texel) and a mid-scale modulation, so that flat regions are not flat.
   cv::Mat f;

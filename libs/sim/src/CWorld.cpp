@@ -29,6 +29,60 @@ struct TAabb
     return (lo.array() - margin < o.hi.array()).all() && (o.lo.array() - margin < hi.array()).all();
   }
 };
+
+/** A box hung on a wall of the room sc.room_min..room_max: thin along the wall's normal. */
+TBox wallBox(const TScenario& sc, CRandom& rng)
+{
+  const Vec3& lo = sc.room_min;
+  const Vec3& hi = sc.room_max;
+  const double floorY = hi.y();
+  const double roomH = hi.y() - lo.y();
+  TBox b;
+  const double lx = hi.x() - lo.x(), lz = hi.z() - lo.z();
+  const double pick = rng.uniform(0.0, 2 * (lx + lz));
+  const int wall = pick < lx ? 0 : pick < 2 * lx ? 1 : pick < 2 * lx + lz ? 2 : 3;  // z-, z+, x-, x+
+  const double depth = rng.uniform(0.08, 0.35);
+  const double width = rng.uniform(sc.box_size_min.x(), sc.box_size_max.x());
+  const double height = std::min(rng.uniform(sc.box_size_min.y(), sc.box_size_max.y()), 0.6 * roomH);
+  const double y = rng.uniform(lo.y() + 0.25 + height / 2, floorY - 0.35 - height / 2);
+  if (wall < 2)
+  {
+    const double x = rng.uniform(lo.x() + width / 2 + 0.1, hi.x() - width / 2 - 0.1);
+    const double z = wall == 0 ? lo.z() + depth / 2 : hi.z() - depth / 2;
+    b.T_W_B.t = Vec3(x, y, z);
+    b.half = 0.5 * Vec3(width, height, depth);
+  }
+  else
+  {
+    const double z = rng.uniform(lo.z() + width / 2 + 0.1, hi.z() - width / 2 - 0.1);
+    const double x = wall == 2 ? lo.x() + depth / 2 : hi.x() - depth / 2;
+    b.T_W_B.t = Vec3(x, y, z);
+    b.half = 0.5 * Vec3(depth, height, width);
+  }
+  return b;
+}
+
+/** A box standing on the floor of the room, turned by `yaw` about the vertical; false when it
+ * enters the keep-out floor rectangle sc.keep_out. */
+bool floorBox(const TScenario& sc, CRandom& rng, TBox& b, double& yaw)
+{
+  const Vec3& lo = sc.room_min;
+  const Vec3& hi = sc.room_max;
+  const double floorY = hi.y();
+  const double roomH = hi.y() - lo.y();
+  Vec3 size;
+  for (int a = 0; a < 3; ++a) size[a] = rng.uniform(sc.box_size_min[a], sc.box_size_max[a]);
+  size.y() = std::min(size.y(), 0.8 * roomH);
+  yaw = rng.uniform(-35.0, 35.0) * kDeg;
+  b.half = 0.5 * size;
+  const Vec3 ah = aabbHalf(b.half, yaw);
+  const double x = rng.uniform(lo.x() + ah.x(), hi.x() - ah.x());
+  const double z = rng.uniform(lo.z() + ah.z(), hi.z() - ah.z());
+  b.T_W_B.t = Vec3(x, floorY - b.half.y(), z);
+  // Outside the keep-out floor rectangle.
+  const auto& ko = sc.keep_out;
+  return !(x + ah.x() > ko[0] && x - ah.x() < ko[2] && z + ah.z() > ko[1] && z - ah.z() < ko[3]);
+}
 }  // namespace
 
 int CWorld::addSurfaces(const Vec3& half, std::uint64_t seedBase, bool isRoom, double shapesPerUnit2, double texelsPerUnit)
@@ -65,10 +119,6 @@ CWorld::CWorld(const TScenario& sc)
   // Static boxes: rejection sampling from the layout stream.
   CRandom rng(CRandom::streamSeed(sc.seed, "layout"));
   std::vector<TAabb> placed;
-  const Vec3& lo = sc.room_min;
-  const Vec3& hi = sc.room_max;
-  const double floorY = hi.y();
-  const double roomH = hi.y() - lo.y();
   for (int i = 0; i < sc.n_boxes; ++i)
   {
     for (int attempt = 0; attempt < 200; ++attempt)
@@ -76,44 +126,9 @@ CWorld::CWorld(const TScenario& sc)
       TBox b;
       double yaw = 0;
       if (rng.uniform() < sc.wall_box_fraction)
-      {  // hung on a wall: thin along the wall's normal
-        const double lx = hi.x() - lo.x(), lz = hi.z() - lo.z();
-        const double pick = rng.uniform(0.0, 2 * (lx + lz));
-        const int wall = pick < lx ? 0 : pick < 2 * lx ? 1 : pick < 2 * lx + lz ? 2 : 3;  // z-, z+, x-, x+
-        const double depth = rng.uniform(0.08, 0.35);
-        const double width = rng.uniform(sc.box_size_min.x(), sc.box_size_max.x());
-        const double height = std::min(rng.uniform(sc.box_size_min.y(), sc.box_size_max.y()), 0.6 * roomH);
-        const double y = rng.uniform(lo.y() + 0.25 + height / 2, floorY - 0.35 - height / 2);
-        if (wall < 2)
-        {
-          const double x = rng.uniform(lo.x() + width / 2 + 0.1, hi.x() - width / 2 - 0.1);
-          const double z = wall == 0 ? lo.z() + depth / 2 : hi.z() - depth / 2;
-          b.T_W_B.t = Vec3(x, y, z);
-          b.half = 0.5 * Vec3(width, height, depth);
-        }
-        else
-        {
-          const double z = rng.uniform(lo.z() + width / 2 + 0.1, hi.z() - width / 2 - 0.1);
-          const double x = wall == 2 ? lo.x() + depth / 2 : hi.x() - depth / 2;
-          b.T_W_B.t = Vec3(x, y, z);
-          b.half = 0.5 * Vec3(depth, height, width);
-        }
-      }
-      else
-      {  // standing on the floor, turned about the vertical
-        Vec3 size;
-        for (int a = 0; a < 3; ++a) size[a] = rng.uniform(sc.box_size_min[a], sc.box_size_max[a]);
-        size.y() = std::min(size.y(), 0.8 * roomH);
-        yaw = rng.uniform(-35.0, 35.0) * kDeg;
-        b.half = 0.5 * size;
-        const Vec3 ah = aabbHalf(b.half, yaw);
-        const double x = rng.uniform(lo.x() + ah.x(), hi.x() - ah.x());
-        const double z = rng.uniform(lo.z() + ah.z(), hi.z() - ah.z());
-        b.T_W_B.t = Vec3(x, floorY - b.half.y(), z);
-        // Outside the keep-out floor rectangle.
-        const auto& ko = sc.keep_out;
-        if (x + ah.x() > ko[0] && x - ah.x() < ko[2] && z + ah.z() > ko[1] && z - ah.z() < ko[3]) continue;
-      }
+        b = wallBox(sc, rng);  // hung on a wall: thin along the wall's normal
+      else if (!floorBox(sc, rng, b, yaw))  // standing on the floor, turned about the vertical
+        continue;
       b.T_W_B.q = yawQuat(yaw);
       const Vec3 ah = aabbHalf(b.half, yaw);
       const TAabb box{b.T_W_B.t - ah, b.T_W_B.t + ah};

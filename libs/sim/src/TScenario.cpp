@@ -200,6 +200,70 @@ std::string segmentsText(const std::vector<TMotionSegment>& segs)
     s += (i ? ", " : "") + toString(segs[i].type) + " " + fmt(segs[i].duration_s);
   return s;
 }
+
+/** The sections of a scenario file by lower-case name: (name as written, lower-case keys). */
+using TPresentSections = std::map<std::string, std::pair<std::string, std::set<std::string>>>;
+
+/** Every section and key of `cfg`, checked: unknown sections and keys, and repeated sections, are
+ * errors naming them (prefixed by `origin`). */
+TPresentSections presentSections(const mrpt::config::CConfigFileBase& cfg, const std::string& origin)
+{
+  std::vector<std::string> sections;
+  cfg.getAllSections(sections);
+  TPresentSections present;
+  for (const auto& sec : sections)
+  {
+    const std::string sl = math::toLower(math::trim(sec));
+    if (sl.empty()) continue;
+    std::vector<std::string> keys;
+    cfg.getAllKeys(sec, keys);
+    const bool isObject = objectSectionId(sl) > 0;
+    const auto it = allowedKeys().find(isObject ? "object" : sl);
+    if (it == allowedKeys().end())
+      throw std::runtime_error(origin + ": unknown section [" + sec +
+                               "] (expected scenario, render, world, motion, objects, object1..object254)");
+    if (present.count(sl)) throw std::runtime_error(origin + ": section [" + sec + "] appears twice");
+    std::set<std::string> ks;
+    for (const auto& k : keys)
+    {
+      const std::string kl = math::toLower(math::trim(k));
+      if (!it->second.count(kl))
+      {
+        std::string allowed;
+        for (const auto& a : it->second) allowed += (allowed.empty() ? "" : ", ") + a;
+        throw std::runtime_error(origin + ": unknown key '" + k + "' in section [" + sec + "] (allowed: " + allowed + ")");
+      }
+      ks.insert(kl);
+    }
+    present[sl] = {sec, ks};
+  }
+  return present;
+}
+
+/** Section [objectN] (r) as the moving object of id N. */
+TMovingObjectSpec readObject(const CSectionReader& r, int id)
+{
+  TMovingObjectSpec o;
+  o.id = id;
+  o.size = r.vec<3>("size", o.size);
+  const std::string path = math::toLower(r.str("path", "linear"));
+  if (path == "linear")
+    o.path = EObjectPath::Linear;
+  else if (path == "circular")
+    o.path = EObjectPath::Circular;
+  else
+    r.fail("path", r.raw("path"), "expected linear or circular");
+  o.center = r.vec<3>("center", o.center);
+  o.direction = r.vec<3>("direction", o.direction);
+  if (!(o.direction.norm() > 1e-9)) r.fail("direction", r.raw("direction"), "must be a non-zero vector");
+  o.amplitude = r.number("amplitude", o.amplitude);
+  o.period_s = r.number("period_s", o.period_s);
+  o.phase_deg = r.number("phase_deg", o.phase_deg);
+  o.start_s = r.number("start_s", o.start_s);
+  o.yaw_deg = r.number("yaw_deg", o.yaw_deg);
+  o.spin_deg_s = r.vec<3>("spin_deg_s", o.spin_deg_s);
+  return o;
+}
 }  // namespace
 
 std::string toString(EMotionLabel label)
@@ -239,35 +303,7 @@ TScenario TScenario::fromConfig(const mrpt::config::CConfigFileBase& cfg, const 
   TScenario sc;
   sc.origin = origin;
   // Collect and validate every section and key.
-  std::vector<std::string> sections;
-  cfg.getAllSections(sections);
-  std::map<std::string, std::pair<std::string, std::set<std::string>>> present;  // lower -> (name, keys)
-  for (const auto& sec : sections)
-  {
-    const std::string sl = math::toLower(math::trim(sec));
-    if (sl.empty()) continue;
-    std::vector<std::string> keys;
-    cfg.getAllKeys(sec, keys);
-    const bool isObject = objectSectionId(sl) > 0;
-    const auto it = allowedKeys().find(isObject ? "object" : sl);
-    if (it == allowedKeys().end())
-      throw std::runtime_error(origin + ": unknown section [" + sec +
-                               "] (expected scenario, render, world, motion, objects, object1..object254)");
-    if (present.count(sl)) throw std::runtime_error(origin + ": section [" + sec + "] appears twice");
-    std::set<std::string> ks;
-    for (const auto& k : keys)
-    {
-      const std::string kl = math::toLower(math::trim(k));
-      if (!it->second.count(kl))
-      {
-        std::string allowed;
-        for (const auto& a : it->second) allowed += (allowed.empty() ? "" : ", ") + a;
-        throw std::runtime_error(origin + ": unknown key '" + k + "' in section [" + sec + "] (allowed: " + allowed + ")");
-      }
-      ks.insert(kl);
-    }
-    present[sl] = {sec, ks};
-  }
+  const TPresentSections present = presentSections(cfg, origin);
   const auto reader = [&](const std::string& sl) {
     const auto it = present.find(sl);
     static const std::set<std::string> none;
@@ -329,27 +365,7 @@ TScenario TScenario::fromConfig(const mrpt::config::CConfigFileBase& cfg, const 
   std::sort(ids.begin(), ids.end());
   for (const int id : ids)
   {
-    const auto r = reader("object" + std::to_string(id));
-    TMovingObjectSpec o;
-    o.id = id;
-    o.size = r.vec<3>("size", o.size);
-    const std::string path = math::toLower(r.str("path", "linear"));
-    if (path == "linear")
-      o.path = EObjectPath::Linear;
-    else if (path == "circular")
-      o.path = EObjectPath::Circular;
-    else
-      r.fail("path", r.raw("path"), "expected linear or circular");
-    o.center = r.vec<3>("center", o.center);
-    o.direction = r.vec<3>("direction", o.direction);
-    if (!(o.direction.norm() > 1e-9)) r.fail("direction", r.raw("direction"), "must be a non-zero vector");
-    o.amplitude = r.number("amplitude", o.amplitude);
-    o.period_s = r.number("period_s", o.period_s);
-    o.phase_deg = r.number("phase_deg", o.phase_deg);
-    o.start_s = r.number("start_s", o.start_s);
-    o.yaw_deg = r.number("yaw_deg", o.yaw_deg);
-    o.spin_deg_s = r.vec<3>("spin_deg_s", o.spin_deg_s);
-    sc.objects.push_back(o);
+    sc.objects.push_back(readObject(reader("object" + std::to_string(id)), id));
   }
   sc.validate();
   return sc;

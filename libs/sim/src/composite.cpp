@@ -142,6 +142,54 @@ void placement(const TCompositeObject& o, std::size_t i, std::size_t last, const
   centre = from + s * d + o.waveAmplitudePx * std::sin(phase) * n;
   scale = o.scaleFirst + s * (o.scaleLast - o.scaleFirst);
 }
+
+/** Pastes object k (prepared as p) into frame i: the texture blended into `img` (float) by its
+ * alpha, its mask value k + 1 into `mask`. c, s: the centre pixel and scale it got; false when its
+ * video has no frame for i (nothing pasted). */
+bool pasteObject(const TCompositeObject& o, std::size_t k, TPrepared& p, std::size_t i, std::size_t last, int channels,
+                 cv::Mat& img, cv::Mat& mask, Vec2& c, double& s)
+{
+  placement(o, i, last, img.size(), c, s);
+  if (p.video && !loadVideoFrame(o, k, p, o.videoStart + (i - o.firstFrame), channels)) return false;
+  // Texture pixel (x, y) (centres at integers) goes to image pixel s (x - (w-1)/2) + c.
+  const cv::Matx23d A(s, 0, c.x() - s * 0.5 * (p.texture.cols - 1), 0, s, c.y() - s * 0.5 * (p.texture.rows - 1));
+  cv::Mat tex, alpha;
+  cv::warpAffine(p.texture, tex, A, img.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::warpAffine(p.alpha, alpha, A, img.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::Mat alphaN;
+  if (channels == 1)
+    alphaN = alpha;
+  else
+    cv::merge(std::vector<cv::Mat>{alpha, alpha, alpha}, alphaN);
+  cv::Mat keep;
+  cv::subtract(cv::Scalar::all(1.0), alphaN, keep);
+  img = img.mul(keep) + tex.mul(alphaN);
+  mask.setTo(static_cast<int>(k + 1), alpha >= 0.5f);
+  return true;
+}
+
+/** A frame's mask in the statistics: the fraction of the image the objects cover. */
+void addCoverage(const cv::Mat& mask, TCompositeStats& st)
+{
+  if (const int covered = cv::countNonZero(mask); covered > 0)
+  {
+    const double cov = static_cast<double>(covered) / static_cast<double>(mask.total());
+    ++st.objectFrames;
+    st.meanCoverage += cov;
+    st.maxCoverage = std::max(st.maxCoverage, cov);
+  }
+}
+
+/** The source's own calibration and ground truth into `out`, byte for byte (timestamps are
+ * unchanged). */
+void copySourceTruth(const std::string& sourceFolder, const fs::path& out)
+{
+  for (const char* name : {"calib.txt", "groundtruth.txt"})
+  {
+    const fs::path from = fs::path(sourceFolder) / name;
+    if (fs::exists(from)) fs::copy_file(from, out / name, fs::copy_options::overwrite_existing);
+  }
+}
 }  // namespace
 
 TCompositeStats compositeMovingObjects(const std::string& sourceFolder, const std::string& outFolder,
@@ -205,23 +253,7 @@ TCompositeStats compositeMovingObjects(const std::string& sourceFolder, const st
       if (i < o.firstFrame || i > last) continue;
       Vec2 c;
       double s = 1;
-      placement(o, i, last, frame.size(), c, s);
-      TPrepared& p = prepared[k];
-      if (p.video && !loadVideoFrame(o, k, p, o.videoStart + (i - o.firstFrame), channels)) continue;
-      // Texture pixel (x, y) (centres at integers) goes to image pixel s (x - (w-1)/2) + c.
-      const cv::Matx23d A(s, 0, c.x() - s * 0.5 * (p.texture.cols - 1), 0, s, c.y() - s * 0.5 * (p.texture.rows - 1));
-      cv::Mat tex, alpha;
-      cv::warpAffine(p.texture, tex, A, frame.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-      cv::warpAffine(p.alpha, alpha, A, frame.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-      cv::Mat alphaN;
-      if (channels == 1)
-        alphaN = alpha;
-      else
-        cv::merge(std::vector<cv::Mat>{alpha, alpha, alpha}, alphaN);
-      cv::Mat keep;
-      cv::subtract(cv::Scalar::all(1.0), alphaN, keep);
-      img = img.mul(keep) + tex.mul(alphaN);
-      mask.setTo(static_cast<int>(k + 1), alpha >= 0.5f);
+      if (!pasteObject(o, k, prepared[k], i, last, channels, img, mask, c, s)) continue;
       char line[160];
       std::snprintf(line, sizeof(line), "%.6f %zu %.3f %.3f %.5f\n", f.timestamp, k + 1, c.x(), c.y(), s);
       objFile << line;
@@ -230,24 +262,13 @@ TCompositeStats compositeMovingObjects(const std::string& sourceFolder, const st
     const std::string rel = writer.addFrame(f.timestamp, frame);
     const std::string maskPath = (out / "masks" / fs::path(rel).filename()).string();
     if (!cv::imwrite(maskPath, mask)) throw std::runtime_error("cannot write '" + maskPath + "'");
-    if (const int covered = cv::countNonZero(mask); covered > 0)
-    {
-      const double cov = static_cast<double>(covered) / static_cast<double>(mask.total());
-      ++st.objectFrames;
-      st.meanCoverage += cov;
-      st.maxCoverage = std::max(st.maxCoverage, cov);
-    }
+    addCoverage(mask, st);
     ++st.frames;
   }
   writer.close();
   if (!objFile.flush()) throw std::runtime_error("write error in " + objectsTxt);
   if (st.objectFrames > 0) st.meanCoverage /= static_cast<double>(st.objectFrames);
-  // The source's own calibration and ground truth, byte for byte (timestamps are unchanged).
-  for (const char* name : {"calib.txt", "groundtruth.txt"})
-  {
-    const fs::path from = fs::path(sourceFolder) / name;
-    if (fs::exists(from)) fs::copy_file(from, out / name, fs::copy_options::overwrite_existing);
-  }
+  copySourceTruth(sourceFolder, out);
   return st;
 }
 
@@ -274,7 +295,55 @@ std::string compositeAppUsage()
 
 namespace
 {
-/** Parses exactly n comma-separated numbers; false on anything else. */
+/** Object option `a` with value `v` (--crop, --scale, --path, --span, --video-start, --wave) into
+ * `o`; the usage error, or "" when it is fine. */
+std::string applyObjectOption(const std::string& a, const std::string& v, TCompositeObject& o)
+{
+  std::vector<double> x;
+  if (a == "--crop")
+  {
+    if (!parseNumbers(v, 4, x) || std::any_of(x.begin(), x.end(), [](double t) { return t < 0 || t != std::floor(t); }))
+      return "--crop needs X,Y,W,H (integers >= 0), got '" + v + "'";
+    o.cropX = static_cast<int>(x[0]), o.cropY = static_cast<int>(x[1]);
+    o.cropW = static_cast<int>(x[2]), o.cropH = static_cast<int>(x[3]);
+  }
+  else if (a == "--scale")
+  {
+    if (parseNumbers(v, 1, x))
+      o.scaleFirst = o.scaleLast = x[0];
+    else if (parseNumbers(v, 2, x))
+      o.scaleFirst = x[0], o.scaleLast = x[1];
+    else
+      return "--scale needs S or S0,S1, got '" + v + "'";
+    if (!(o.scaleFirst > 0 && o.scaleLast > 0)) return "--scale must be > 0, got '" + v + "'";
+  }
+  else if (a == "--path")
+  {
+    if (!parseNumbers(v, 4, x)) return "--path needs U0,V0,U1,V1, got '" + v + "'";
+    o.from = Vec2(x[0], x[1]), o.to = Vec2(x[2], x[3]);
+  }
+  else if (a == "--span")
+  {
+    if (!parseNumbers(v, 2, x) || x[0] < 0 || x[1] < x[0] || x[0] != std::floor(x[0]) || x[1] != std::floor(x[1]))
+      return "--span needs A,B (integers, 0 <= A <= B), got '" + v + "'";
+    o.firstFrame = static_cast<std::size_t>(x[0]), o.lastFrame = static_cast<std::size_t>(x[1]);
+  }
+  else if (a == "--video-start")
+  {
+    if (!parseNumbers(v, 1, x) || x[0] < 0 || x[0] != std::floor(x[0]))
+      return "--video-start needs a frame index >= 0, got '" + v + "'";
+    if (o.video.empty()) return "--video-start applies to an --object-video";
+    o.videoStart = static_cast<std::size_t>(x[0]);
+  }
+  else if (a == "--wave")
+  {
+    if (!parseNumbers(v, 2, x) || !(x[1] > 0)) return "--wave needs AMP,PERIOD (period > 0), got '" + v + "'";
+    o.waveAmplitudePx = x[0], o.wavePeriodFrames = x[1];
+  }
+  else
+    return "unknown option '" + a + "'";
+  return std::string();
+}
 }  // namespace
 
 int runCompositeApp(const std::vector<std::string>& args, std::ostream& out, std::ostream& err)
@@ -307,50 +376,7 @@ int runCompositeApp(const std::vector<std::string>& args, std::ostream& out, std
       continue;
     }
     if (objects.empty()) return usageError(a + " before any --object or --object-video");
-    TCompositeObject& o = objects.back();
-    std::vector<double> x;
-    if (a == "--crop")
-    {
-      if (!parseNumbers(v, 4, x) || std::any_of(x.begin(), x.end(), [](double t) { return t < 0 || t != std::floor(t); }))
-        return usageError("--crop needs X,Y,W,H (integers >= 0), got '" + v + "'");
-      o.cropX = static_cast<int>(x[0]), o.cropY = static_cast<int>(x[1]);
-      o.cropW = static_cast<int>(x[2]), o.cropH = static_cast<int>(x[3]);
-    }
-    else if (a == "--scale")
-    {
-      if (parseNumbers(v, 1, x))
-        o.scaleFirst = o.scaleLast = x[0];
-      else if (parseNumbers(v, 2, x))
-        o.scaleFirst = x[0], o.scaleLast = x[1];
-      else
-        return usageError("--scale needs S or S0,S1, got '" + v + "'");
-      if (!(o.scaleFirst > 0 && o.scaleLast > 0)) return usageError("--scale must be > 0, got '" + v + "'");
-    }
-    else if (a == "--path")
-    {
-      if (!parseNumbers(v, 4, x)) return usageError("--path needs U0,V0,U1,V1, got '" + v + "'");
-      o.from = Vec2(x[0], x[1]), o.to = Vec2(x[2], x[3]);
-    }
-    else if (a == "--span")
-    {
-      if (!parseNumbers(v, 2, x) || x[0] < 0 || x[1] < x[0] || x[0] != std::floor(x[0]) || x[1] != std::floor(x[1]))
-        return usageError("--span needs A,B (integers, 0 <= A <= B), got '" + v + "'");
-      o.firstFrame = static_cast<std::size_t>(x[0]), o.lastFrame = static_cast<std::size_t>(x[1]);
-    }
-    else if (a == "--video-start")
-    {
-      if (!parseNumbers(v, 1, x) || x[0] < 0 || x[0] != std::floor(x[0]))
-        return usageError("--video-start needs a frame index >= 0, got '" + v + "'");
-      if (o.video.empty()) return usageError("--video-start applies to an --object-video");
-      o.videoStart = static_cast<std::size_t>(x[0]);
-    }
-    else if (a == "--wave")
-    {
-      if (!parseNumbers(v, 2, x) || !(x[1] > 0)) return usageError("--wave needs AMP,PERIOD (period > 0), got '" + v + "'");
-      o.waveAmplitudePx = x[0], o.wavePeriodFrames = x[1];
-    }
-    else
-      return usageError("unknown option '" + a + "'");
+    if (const std::string e = applyObjectOption(a, v, objects.back()); !e.empty()) return usageError(e);
   }
   if (positional.size() != 2) return usageError("expected SOURCE_FOLDER and OUT_FOLDER");
   if (objects.empty()) return usageError("give at least one --object IMAGE or --object-video FOLDER");

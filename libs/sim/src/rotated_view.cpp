@@ -174,6 +174,81 @@ Vec4 rotatedViewQuaternion(const TRotatedViewOptions& o, std::size_t i)
   return math::quatMultiply(math::quatMultiply(qPan, qTilt), qRoll);
 }
 
+namespace
+{
+/** The remap of a virtual frame: each virtual pixel's ray (`rays`) rotated by R into the source
+ * camera and projected with its lens (-1e4 outside the source image); returns how many fall outside. */
+std::size_t rotatedMaps(const camera::CCameraModel& src, const Mat3& R, const std::vector<Vec3>& rays, cv::Mat& mapU,
+                        cv::Mat& mapV)
+{
+  const int W = mapU.cols, H = mapU.rows;
+  std::size_t outside = 0;
+  for (int v = 0; v < H; ++v)
+    for (int u = 0; u < W; ++u)
+    {
+      Vec2 uv;
+      const bool ok = src.project(R * rays[static_cast<std::size_t>(v) * W + u], uv) && src.isInImage(uv);
+      mapU.at<float>(v, u) = ok ? static_cast<float>(uv.x()) : -1e4f;
+      mapV.at<float>(v, u) = ok ? static_cast<float>(uv.y()) : -1e4f;
+      outside += ok ? 0 : 1;
+    }
+  return outside;
+}
+
+/** Ground truth of the virtual camera at time t, rotated by q: in the source's world (the source's
+ * pose within 1 ms), or the identity for a still source; false when there is none. */
+bool virtualGroundTruth(const std::optional<core::TTrajectory>& sourceGt, double t, const Vec4& q, bool still,
+                        core::TStampedPose& gt)
+{
+  gt.timestamp = t;
+  gt.q_W_C = q;
+  bool haveGt = still;
+  if (sourceGt && !sourceGt->empty())
+  {
+    const auto best = std::min_element(sourceGt->begin(), sourceGt->end(), [&](const auto& a, const auto& b) {
+      return std::abs(a.timestamp - t) < std::abs(b.timestamp - t);
+    });
+    if (std::abs(best->timestamp - t) < 1e-3)
+    {
+      gt.p_W_C = best->p_W_C;
+      gt.q_W_C = math::quatMultiply(best->q_W_C, q);
+      haveGt = true;
+    }
+  }
+  return haveGt;
+}
+
+/** The mask of what moves in a still source's frame (`grey` against `background`), remapped into
+ * the virtual view and written to `file`; returns the fraction of the view it covers. */
+double writeMovingMask(const cv::Mat& grey, const cv::Mat& background, const TRotatedViewOptions& o,
+                       const cv::Mat& mapU, const cv::Mat& mapV, const std::string& file)
+{
+  const cv::Mat maskSrc = movingMask(grey, background, o);
+  cv::Mat mask;
+  cv::remap(maskSrc, mask, mapU, mapV, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
+  if (!cv::imwrite(file, mask)) throw std::runtime_error("cannot write " + file);
+  return cv::countNonZero(mask) / (mapU.cols * static_cast<double>(mapU.rows));
+}
+
+/** The output folder of a still source: masks/ and background.png. */
+void prepareStillOutputs(const std::string& outFolder, const cv::Mat& background)
+{
+  fs::create_directories(fs::path(outFolder) / "masks");
+  const std::string bgFile = (fs::path(outFolder) / "background.png").string();
+  if (!cv::imwrite(bgFile, background)) throw std::runtime_error("cannot write " + bgFile);
+}
+
+/** The unit rays of the virtual camera's pixels (row-major). */
+std::vector<Vec3> pixelRays(const camera::CPinholeCamera& virt)
+{
+  const int W = virt.width(), H = virt.height();
+  std::vector<Vec3> rays(static_cast<std::size_t>(W) * static_cast<std::size_t>(H));
+  for (int v = 0; v < H; ++v)
+    for (int u = 0; u < W; ++u) rays[static_cast<std::size_t>(v) * W + u] = virt.unproject(Vec2(u, v)).unitVector();
+  return rays;
+}
+}  // namespace
+
 TRotatedViewStats rotateStillVideo(const std::string& source, const std::string& outFolder,
                                    const TRotatedViewOptions& o)
 {
@@ -200,12 +275,7 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
   if (o.still) background = stableBackground(source, o);
 
   fs::create_directories(outFolder);
-  if (o.still)
-  {
-    fs::create_directories(fs::path(outFolder) / "masks");
-    const std::string bgFile = (fs::path(outFolder) / "background.png").string();
-    if (!cv::imwrite(bgFile, background)) throw std::runtime_error("cannot write " + bgFile);
-  }
+  if (o.still) prepareStillOutputs(outFolder, background);
   std::ostringstream comment;
   comment << "imm-rotate: " << source << " seen by a camera rotating about its optical centre (pan " << o.panDeg
           << ", tilt " << o.tiltDeg << ", roll " << o.rollDeg << " deg, period " << o.periodFrames << " frames)";
@@ -225,9 +295,7 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
   TRotatedViewStats st;
   cv::Mat mapU(H, W, CV_32FC1), mapV(H, W, CV_32FC1);
   // The virtual pixels' rays, once; each frame only rotates and projects them.
-  std::vector<Vec3> rays(static_cast<std::size_t>(W) * static_cast<std::size_t>(H));
-  for (int v = 0; v < H; ++v)
-    for (int u = 0; u < W; ++u) rays[static_cast<std::size_t>(v) * W + u] = virt.unproject(Vec2(u, v)).unitVector();
+  const std::vector<Vec3> rays = pixelRays(virt);
   io::TFrame fr;
   std::size_t n = 0;
   double movingSum = 0;
@@ -240,51 +308,20 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
     const Vec4 q = rotatedViewQuaternion(o, n);
     const Mat3 R = math::quatToRotation(q);
     st.maxAngleDeg = std::max(st.maxAngleDeg, 2 * std::acos(std::min(1.0, std::abs(q[0]))) * 180 / kPi);
-    // Each virtual pixel: its ray, rotated into the source camera, projected with the real lens.
-    std::size_t outside = 0;
-    for (int v = 0; v < H; ++v)
-      for (int u = 0; u < W; ++u)
-      {
-        Vec2 uv;
-        const bool ok = src->project(R * rays[static_cast<std::size_t>(v) * W + u], uv) && src->isInImage(uv);
-        mapU.at<float>(v, u) = ok ? static_cast<float>(uv.x()) : -1e4f;
-        mapV.at<float>(v, u) = ok ? static_cast<float>(uv.y()) : -1e4f;
-        outside += ok ? 0 : 1;
-      }
+    const std::size_t outside = rotatedMaps(*src, R, rays, mapU, mapV);
     st.maxOutsideFraction = std::max(st.maxOutsideFraction, static_cast<double>(outside) / (W * static_cast<double>(H)));
     const cv::Mat& in = fr.colour.empty() ? fr.grey : fr.colour;
     cv::Mat out;
     cv::remap(in, out, mapU, mapV, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(0));
-    // Ground truth: the virtual camera in the source's world (the source pose, or the identity).
     core::TStampedPose gt;
-    gt.timestamp = fr.timestamp;
-    gt.q_W_C = q;
-    bool haveGt = o.still;
-    if (sourceGt && !sourceGt->empty())
-    {
-      const auto best = std::min_element(sourceGt->begin(), sourceGt->end(), [&](const auto& a, const auto& b) {
-        return std::abs(a.timestamp - fr.timestamp) < std::abs(b.timestamp - fr.timestamp);
-      });
-      if (std::abs(best->timestamp - fr.timestamp) < 1e-3)
-      {
-        gt.p_W_C = best->p_W_C;
-        gt.q_W_C = math::quatMultiply(best->q_W_C, q);
-        haveGt = true;
-      }
-    }
+    const bool haveGt = virtualGroundTruth(sourceGt, fr.timestamp, q, o.still, gt);
     const std::string name = writer.addFrame(fr.timestamp, out, haveGt ? &gt : nullptr);
     char stamp[64];
     std::snprintf(stamp, sizeof(stamp), "%.6f", fr.timestamp);
     if (o.still) labels << stamp << ' ' << (n > 0 && rotates ? "rotation" : "stationary") << '\n';
     if (o.still)
-    {
-      const cv::Mat maskSrc = movingMask(fr.grey, background, o);
-      cv::Mat mask;
-      cv::remap(maskSrc, mask, mapU, mapV, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
-      const std::string maskFile = (fs::path(outFolder) / "masks" / fs::path(name).filename()).string();
-      if (!cv::imwrite(maskFile, mask)) throw std::runtime_error("cannot write " + maskFile);
-      movingSum += cv::countNonZero(mask) / (W * static_cast<double>(H));
-    }
+      movingSum += writeMovingMask(fr.grey, background, o, mapU, mapV,
+                                   (fs::path(outFolder) / "masks" / fs::path(name).filename()).string());
     ++n;
   }
   writer.close();

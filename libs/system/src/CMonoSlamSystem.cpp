@@ -23,6 +23,25 @@ int countAdded(const std::vector<std::int64_t>& ids)
 }
 /** Memory of the automatic pending weight: outcome counts decay by this factor per frame (~100 frames). */
 constexpr double kOutcomeDecay = 0.99;
+/** The new tracks `fresh` farthest from every feature held (`avoid`), one at a time (as corners
+ * in empty cells), at most `want`: their track ids and pixels. */
+void farthestTracks(const std::vector<std::pair<std::int64_t, Vec2>>& fresh, const std::vector<Vec2>& avoid, int want,
+                    std::vector<std::int64_t>& tracks, std::vector<Vec2>& uv)
+{
+  std::vector<double> gap(fresh.size(), std::numeric_limits<double>::infinity());
+  for (std::size_t k = 0; k < fresh.size(); ++k)
+    for (const auto& a : avoid) gap[k] = std::min(gap[k], (fresh[k].second - a).norm());
+  while (static_cast<int>(uv.size()) < want)
+  {
+    const auto best = std::max_element(gap.begin(), gap.end()) - gap.begin();
+    if (gap[best] < 0) break;  // every new track taken
+    tracks.push_back(fresh[best].first);
+    uv.push_back(fresh[best].second);
+    gap[best] = -1;
+    for (std::size_t k = 0; k < fresh.size(); ++k)
+      if (gap[k] >= 0) gap[k] = std::min(gap[k], (fresh[k].second - uv.back()).norm());
+  }
+}
 }  // namespace
 
 double CMonoSlamSystem::TOptions::parsePendingWeight(const std::string& text, const std::string& section)
@@ -359,22 +378,9 @@ const TSystemFrame& CMonoSlamSystem::processMeasurements(double timestamp,
   const int want = newFeaturesWanted(slamInView, pendingVisible, holding, firstMap);
   if (want > 0 && !fresh.empty())
   {
-    // The new tracks farthest from every feature held, one at a time (as corners in empty cells).
-    std::vector<double> gap(fresh.size(), std::numeric_limits<double>::infinity());
-    for (std::size_t k = 0; k < fresh.size(); ++k)
-      for (const auto& a : avoid) gap[k] = std::min(gap[k], (fresh[k].second - a).norm());
     std::vector<std::int64_t> tracks;
     std::vector<Vec2> uv;
-    while (static_cast<int>(uv.size()) < want)
-    {
-      const auto best = std::max_element(gap.begin(), gap.end()) - gap.begin();
-      if (gap[best] < 0) break;  // every new track taken
-      tracks.push_back(fresh[best].first);
-      uv.push_back(fresh[best].second);
-      gap[best] = -1;
-      for (std::size_t k = 0; k < fresh.size(); ++k)
-        if (gap[k] >= 0) gap[k] = std::min(gap[k], (fresh[k].second - uv.back()).norm());
-    }
+    farthestTracks(fresh, avoid, want, tracks, uv);
     std::vector<std::int64_t> ids;
     if (m_shadow && !firstMap)
     {

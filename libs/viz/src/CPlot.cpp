@@ -3,6 +3,7 @@
 #include <immslam/viz/overlay.h>
 
 #include "cv_text.h"
+#include "plot_axes.h"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -21,88 +22,9 @@ constexpr double kOne = 1 << kShift;
 constexpr double kTickFont = 0.45, kLabelFont = 0.55, kTitleFont = 0.7, kLegendFont = 0.47;
 const cv::Scalar kInk(40, 40, 40), kGridInk(228, 228, 228), kMinorGridInk(242, 242, 242);
 
-struct TAxis
-{
-  double lo = 0, hi = 1;        // in axis units (log10 for a log axis)
-  std::vector<double> major;    // tick positions in axis units
-  std::vector<double> minor;    // minor ticks (log axis)
-  std::vector<std::string> labels;
-};
-
-double niceStep(double range, int targetTicks)
-{
-  const double raw = range / std::max(1, targetTicks);
-  const double e = std::floor(std::log10(raw));
-  const double f = raw / std::pow(10.0, e);
-  const double nf = f <= 1.0 ? 1 : (f <= 2.0 ? 2 : (f <= 2.5 ? 2.5 : (f <= 5.0 ? 5 : 10)));
-  return nf * std::pow(10.0, e);
-}
-
-/** Linear axis; `loose` widens lo/hi to multiples of the step. */
-TAxis linearAxis(double lo, double hi, int targetTicks, bool loose)
-{
-  if (!(hi > lo))
-  {
-    const double c = std::isfinite(lo) ? lo : 0.0, h = std::max(1e-9, std::abs(c) * 0.05 + 0.5);
-    lo = c - h;
-    hi = c + h;
-  }
-  TAxis a;
-  const double step = niceStep(hi - lo, targetTicks);
-  if (loose)
-  {
-    lo = std::floor(lo / step + 1e-9) * step;
-    hi = std::ceil(hi / step - 1e-9) * step;
-  }
-  a.lo = lo;
-  a.hi = hi;
-  const long k0 = static_cast<long>(std::ceil(lo / step - 1e-9));
-  const long k1 = static_cast<long>(std::floor(hi / step + 1e-9));
-  // Decimals needed by the step (e.g. 0.25 -> 2).
-  int dec = 0;
-  while (dec < 10 && std::abs(step * std::pow(10.0, dec) - std::round(step * std::pow(10.0, dec))) >
-                         1e-6 * step * std::pow(10.0, dec))
-    ++dec;
-  for (long k = k0; k <= k1; ++k)
-  {
-    const double v = k * step;
-    a.major.push_back(v);
-    const double r = std::abs(v) < 1e-12 * step ? 0.0 : v;
-    const double mag = std::max(std::abs(lo), std::abs(hi));
-    if (mag >= 1e5 || (mag < 1e-3 && mag > 0))
-      a.labels.push_back(formatNumber(r, 3));
-    else
-    {
-      char buf[64];
-      std::snprintf(buf, sizeof buf, "%.*f", dec, r);
-      a.labels.push_back(buf);
-    }
-  }
-  return a;
-}
-
-/** Log-10 axis over [lo, hi] > 0 (decades rounded outwards). */
-TAxis logAxis(double lo, double hi)
-{
-  TAxis a;
-  double l = std::floor(std::log10(lo) + 1e-9), h = std::ceil(std::log10(hi) - 1e-9);
-  if (h <= l) h = l + 1;
-  a.lo = l;
-  a.hi = h;
-  const int decades = static_cast<int>(h - l);
-  const int every = decades > 8 ? (decades + 7) / 8 : 1;
-  for (int k = static_cast<int>(l); k <= static_cast<int>(h); ++k)
-  {
-    if ((k - static_cast<int>(l)) % every == 0)
-    {
-      a.major.push_back(k);
-      a.labels.push_back(formatNumber(std::pow(10.0, k), 3));
-    }
-    if (decades <= 6 && k < h)
-      for (int m = 2; m <= 9; ++m) a.minor.push_back(k + std::log10(m));
-  }
-  return a;
-}
+using detail::linearAxis;
+using detail::logAxis;
+using detail::TAxis;
 
 cv::Point fp(double x, double y)
 {
@@ -232,13 +154,45 @@ CPlot& CPlot::setBand(const TPlotBand& band)
   return *this;
 }
 
+/** The plot area of a CPlot, its axes, legend and band categories, and the data-to-pixel maps. */
+struct CPlot::TLayout
+{
+  cv::Rect area;
+  TAxis ax, ay;
+  bool logY = false;
+  int tickH = 0, labelH = 0, tickLen = 5, bandH = 0, bandGap = 0;
+  std::vector<TLegendItem> legend;
+  std::vector<std::string> cats;  ///< band categories: the given ones, then labels not among them
+  std::vector<TColour> catColours;
+  int swatch = 26, lpad = 8, rowH = 0, legendW = 0, legendH = 0;
+  bool legendRight = false;
+
+  double X(double x) const { return area.x + (x - ax.lo) / (ax.hi - ax.lo) * area.width; }
+  double Yax(double yAxisUnits) const
+  {
+    return area.y + area.height - (yAxisUnits - ay.lo) / (ay.hi - ay.lo) * area.height;
+  }
+  double Y(double y) const { return Yax(logY ? std::log10(y) : y); }
+};
+
 cv::Mat CPlot::render() const
 {
   if (m_logY && !m_areas.empty())
     throw std::runtime_error("CPlot: stacked areas cannot be drawn on a log y axis");
-  // ---- Data ranges.
+  double x0, x1, y0, y1;
+  dataRanges(x0, x1, y0, y1);
+  const TLayout L = layout(x0, x1, y0, y1);
+  cv::Mat img(m_height, m_width, CV_8UC3, cv::Scalar(255, 255, 255));
+  drawData(img, L);
+  drawAxes(img, L);
+  drawLegend(img, L);
+  return img;
+}
+
+void CPlot::dataRanges(double& x0, double& x1, double& y0, double& y1) const
+{
   const double inf = std::numeric_limits<double>::infinity();
-  double x0 = inf, x1 = -inf, y0 = inf, y1 = -inf;
+  x0 = inf, x1 = -inf, y0 = inf, y1 = -inf;
   const auto useY = [&](double y) {
     if (!std::isfinite(y) || (m_logY && y <= 0)) return;
     y0 = std::min(y0, y);
@@ -279,24 +233,19 @@ cv::Mat CPlot::render() const
     y1 += pad;
   }
   if (m_logY && y0 <= 0) throw std::runtime_error("CPlot: log y axis needs a positive y range");
+}
 
-  // ---- Layout.
-  int base = 0;
-  const int tickH = textSize("0", kTickFont, 1, &base).height + base;
-  const int labelH = textSize("Ag", kLabelFont, 1).height + base;
-  const int titleH = textSize("Ag", kTitleFont, 1).height;
-  const int tickLen = 5;
-
-  // Legend items.
-  std::vector<TLegendItem> legend;
+void CPlot::legendItems(TLayout& L) const
+{
+  std::vector<TLegendItem>& legend = L.legend;
+  std::vector<std::string>& cats = L.cats;
+  std::vector<TColour>& catColours = L.catColours;
   for (const auto& s : m_lines)
     if (!s.name.empty())
       legend.push_back({TLegendItem::Line, s.name, toBgr(s.colour), s.lineWidth, s.dashed});
   for (const auto& a : m_areas)
     for (size_t k = a.names.size(); k-- > 0;)  // top layer first, as stacked
       legend.push_back({TLegendItem::Box, a.names[k], toBgr(a.colours[k])});
-  std::vector<std::string> cats;
-  std::vector<TColour> catColours;
   if (m_band)
   {
     cats = m_band->categories;
@@ -311,7 +260,21 @@ cv::Mat CPlot::render() const
     for (size_t k = 0; k < cats.size(); ++k)
       legend.push_back({TLegendItem::Box, cats[k], toBgr(catColours[k])});
   }
-  const int swatch = 26, lpad = 8;
+}
+
+CPlot::TLayout CPlot::layout(double x0, double x1, double y0, double y1) const
+{
+  TLayout L;
+  L.logY = m_logY;
+  int base = 0;
+  const int tickH = textSize("0", kTickFont, 1, &base).height + base;
+  const int labelH = textSize("Ag", kLabelFont, 1).height + base;
+  const int titleH = textSize("Ag", kTitleFont, 1).height;
+  const int tickLen = 5;
+
+  legendItems(L);
+  const std::vector<TLegendItem>& legend = L.legend;
+  const int swatch = L.swatch, lpad = L.lpad;
   const int rowH = textSize("Ag", kLegendFont, 1).height + base + 6;
   int legendW = 0;
   for (const auto& it : legend) legendW = std::max(legendW, textSize(it.name, kLegendFont, 1).width);
@@ -344,14 +307,29 @@ cv::Mat CPlot::render() const
   const cv::Rect area(left, top, m_width - left - right, m_height - top - bottom);
   if (area.width < 40 || area.height < 40)
     throw std::runtime_error("CPlot: image too small for its labels/legend");
+  L.area = area;
+  L.ax = ax;
+  L.ay = ay;
+  L.tickH = tickH;
+  L.labelH = labelH;
+  L.tickLen = tickLen;
+  L.bandH = bandH;
+  L.bandGap = bandGap;
+  L.rowH = rowH;
+  L.legendW = legendW;
+  L.legendH = legendH;
+  L.legendRight = legendRight;
+  return L;
+}
 
-  const auto X = [&](double x) { return area.x + (x - ax.lo) / (ax.hi - ax.lo) * area.width; };
-  const auto Yax = [&](double yAxisUnits) {
-    return area.y + area.height - (yAxisUnits - ay.lo) / (ay.hi - ay.lo) * area.height;
-  };
-  const auto Y = [&](double y) { return Yax(m_logY ? std::log10(y) : y); };
-
-  cv::Mat img(m_height, m_width, CV_8UC3, cv::Scalar(255, 255, 255));
+void CPlot::drawData(cv::Mat& img, const TLayout& L) const
+{
+  const cv::Rect& area = L.area;
+  const TAxis& ax = L.ax;
+  const TAxis& ay = L.ay;
+  const auto X = [&](double x) { return L.X(x); };
+  const auto Yax = [&](double yAxisUnits) { return L.Yax(yAxisUnits); };
+  const auto Y = [&](double y) { return L.Y(y); };
   cv::Mat roi = img(area);
   const auto rx = [&](double x) { return X(x) - area.x; };
   const auto ry = [&](double y) { return Y(y) - area.y; };
@@ -423,6 +401,18 @@ cv::Mat CPlot::render() const
       havePrev = true;
     }
   }
+}
+
+void CPlot::drawAxes(cv::Mat& img, const TLayout& L) const
+{
+  const cv::Rect& area = L.area;
+  const TAxis& ax = L.ax;
+  const TAxis& ay = L.ay;
+  const auto X = [&](double x) { return L.X(x); };
+  const auto Yax = [&](double yAxisUnits) { return L.Yax(yAxisUnits); };
+  const int tickLen = L.tickLen, tickH = L.tickH, labelH = L.labelH, bandH = L.bandH, bandGap = L.bandGap;
+  const std::vector<std::string>& cats = L.cats;
+  const std::vector<TColour>& catColours = L.catColours;
 
   // ---- Frame, ticks, tick labels.
   cv::rectangle(img, area, kInk, 1, cv::LINE_8);
@@ -488,8 +478,16 @@ cv::Mat CPlot::render() const
     drawText(img, m_title, cv::Point(std::max(4, area.x + area.width / 2 - w / 2), 12), kTitleFont,
         cv::Scalar(0, 0, 0), 1);
   }
+}
 
-  // ---- Legend.
+void CPlot::drawLegend(cv::Mat& img, const TLayout& L) const
+{
+  const cv::Rect& area = L.area;
+  const auto X = [&](double x) { return L.X(x); };
+  const auto Y = [&](double y) { return L.Y(y); };
+  const std::vector<TLegendItem>& legend = L.legend;
+  const int swatch = L.swatch, lpad = L.lpad, rowH = L.rowH, legendW = L.legendW, legendH = L.legendH;
+  const bool legendRight = L.legendRight;
   if (!legend.empty() && m_legend != ELegend::None)
   {
     cv::Rect box(area.x + area.width - legendW - 8, area.y + 8, legendW, legendH);
@@ -549,7 +547,6 @@ cv::Mat CPlot::render() const
       drawText(img, it.name, cv::Point(tx, cy - sz.height / 2 - 1), kLegendFont, kInk);
     }
   }
-  return img;
 }
 
 void CPlot::save(const std::string& png) const { writePng(render(), png); }

@@ -162,6 +162,42 @@ int overlayScale(const cv::Size& size, const TOverlayStyle& style)
   return std::max(size.width, size.height) <= 400 ? 2 : 1;
 }
 
+namespace
+{
+/** One search of the overlay at scale s: its gate ellipse, the predicted point, the match (a cross
+ * when rejected) and the line to it, the feature's id. */
+void drawSearch(cv::Mat& out, const TSearchView& sv, const TOverlayStyle& st, int s)
+{
+  const cv::Scalar col = statusColour(sv.status, st);
+  const int th = std::max(1, st.lineThickness);
+  const double r = st.markerRadius;
+  const auto poly = gateEllipsePolygon(sv.h, sv.S, sv.gateChi2, std::max(8, st.ellipseSegments));
+  if (!poly.empty())
+  {
+    std::vector<cv::Point> pts;
+    pts.reserve(poly.size());
+    for (const auto& p : poly) pts.push_back(fixedPoint(toOverlayPixel(p, s)));
+    cv::polylines(out, pts, true, col, th, cv::LINE_AA, kShift);
+  }
+  if (!sv.h.allFinite()) return;
+  const Vec2 h = toOverlayPixel(sv.h, s);
+  drawCross(out, h, 0.6 * r, col, th, false);
+  if (sv.z && sv.z->allFinite())
+  {
+    const Vec2 z = toOverlayPixel(*sv.z, s);
+    if (st.drawMatchLines) cv::line(out, fixedPoint(h), fixedPoint(z), col, th, cv::LINE_AA, kShift);
+    if (sv.status == ESearchStatus::Rejected)
+      drawCross(out, z, r, col, th + 1, true);
+    else
+      cv::circle(out, fixedPoint(z), static_cast<int>(std::lround(r * kOne)), col, th,
+          cv::LINE_AA, kShift);
+  }
+  if (st.drawIds && sv.id >= 0)
+    drawText(out, std::to_string(sv.id), cv::Point(int(h.x() + r + 2), int(h.y() + 2)),
+        0.8 * st.fontScale, col, 1);
+}
+}  // namespace
+
 cv::Mat drawOverlay(const cv::Mat& image, const TOverlayContent& content, const TOverlayStyle& style)
 {
   cv::Mat out = toBgr8(image);
@@ -173,38 +209,13 @@ cv::Mat drawOverlay(const cv::Mat& image, const TOverlayContent& content, const 
   st.lineThickness = static_cast<int>(std::lround(std::max(1, style.lineThickness) * grow));
   st.markerRadius = style.markerRadius * grow;
   st.fontScale = style.fontScale * grow;
-  const int th = std::max(1, st.lineThickness);
   const double r = st.markerRadius;
 
   bool used[4] = {false, false, false, false};
   for (const auto& sv : content.searches)
   {
-    const cv::Scalar col = statusColour(sv.status, st);
     used[static_cast<int>(sv.status)] = true;
-    const auto poly = gateEllipsePolygon(sv.h, sv.S, sv.gateChi2, std::max(8, st.ellipseSegments));
-    if (!poly.empty())
-    {
-      std::vector<cv::Point> pts;
-      pts.reserve(poly.size());
-      for (const auto& p : poly) pts.push_back(fixedPoint(toOverlayPixel(p, s)));
-      cv::polylines(out, pts, true, col, th, cv::LINE_AA, kShift);
-    }
-    if (!sv.h.allFinite()) continue;
-    const Vec2 h = toOverlayPixel(sv.h, s);
-    drawCross(out, h, 0.6 * r, col, th, false);
-    if (sv.z && sv.z->allFinite())
-    {
-      const Vec2 z = toOverlayPixel(*sv.z, s);
-      if (st.drawMatchLines) cv::line(out, fixedPoint(h), fixedPoint(z), col, th, cv::LINE_AA, kShift);
-      if (sv.status == ESearchStatus::Rejected)
-        drawCross(out, z, r, col, th + 1, true);
-      else
-        cv::circle(out, fixedPoint(z), static_cast<int>(std::lround(r * kOne)), col, th,
-            cv::LINE_AA, kShift);
-    }
-    if (st.drawIds && sv.id >= 0)
-      drawText(out, std::to_string(sv.id), cv::Point(int(h.x() + r + 2), int(h.y() + 2)),
-          0.8 * st.fontScale, col, 1);
+    drawSearch(out, sv, st, s);
   }
 
   bool usedCls[3] = {false, false, false};

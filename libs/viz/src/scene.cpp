@@ -148,6 +148,47 @@ mo::CSetOfObjects::Ptr cameraObject(
   return g;
 }
 
+/** The uncertainty ellipsoid of an inverse-depth map point (MRPT's parametrization `mp`, its
+ * covariance M in MRPT's ellipsoid order). */
+mo::CRenderizable::Ptr inverseDepthEllipsoid(const TMrptInverseDepth& mp, const Mat3& M, const TColour& col,
+    const std::string& id, double underflowRange, const TSceneOptions& o)
+{
+  auto e = mo::CEllipsoidInverseDepth3D::Create();
+  e->setName("map_id_" + id);
+  e->setPose(mp.pose);
+  mrpt::math::CMatrixDouble33 cov;
+  mrpt::math::CMatrixDouble31 mean;
+  for (int r = 0; r < 3; ++r)
+  {
+    mean[r] = mp.mean[r];
+    for (int k = 0; k < 3; ++k) cov(r, k) = M(r, k);
+  }
+  e->setCovMatrixAndMean(cov, mean);
+  e->setQuantiles(static_cast<float>(o.nSigmas));
+  e->setUnderflowMaxRange(static_cast<float>(underflowRange));
+  e->setNumberOfSegments(static_cast<uint32_t>(std::max(4, o.ellipsoidSegments)));
+  e->setColor_u8(toMrptColour(col, 200));
+  e->setLineWidth(1.0f);
+  return e;
+}
+
+/** The uncertainty ellipsoid of an XYZ map point at p_W (covariance M in MRPT's order). */
+mo::CRenderizable::Ptr xyzEllipsoid(const Vec3& p_W, const Mat3& M, const std::string& id, const TSceneOptions& o)
+{
+  auto e = mo::CEllipsoid3D::Create();
+  e->setName("map_xyz_" + id);
+  e->setLocation(p_W[0], p_W[1], p_W[2]);
+  mrpt::math::CMatrixDouble33 cov;
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k) cov(r, k) = M(r, k);
+  e->setCovMatrix(cov);
+  e->setQuantiles(static_cast<float>(o.nSigmas));
+  e->setNumberOfSegments(static_cast<uint32_t>(std::max(4, o.ellipsoidSegments)));
+  e->setColor_u8(toMrptColour(o.xyzColour, 200));
+  e->setLineWidth(1.0f);
+  return e;
+}
+
 void addMap(mo::CSetOfObjects& world, const TSceneContent& c, double rayLength,
     double underflowRange, const TSceneOptions& o)
 {
@@ -167,7 +208,6 @@ void addMap(mo::CSetOfObjects& world, const TSceneContent& c, double rayLength,
     return std::array<float, 3>{k.r / 255.f, k.g / 255.f, k.b / 255.f};
   };
   const auto kx = rgb(o.xyzColour), kk = rgb(o.idKnownColour);
-  const auto seg = static_cast<uint32_t>(std::max(4, o.ellipsoidSegments));
   for (const auto& f : c.points)
   {
     const std::string id = std::to_string(f.id);
@@ -181,26 +221,7 @@ void addMap(mo::CSetOfObjects& world, const TSceneContent& c, double rayLength,
       const TColour col = f.depthKnown ? o.idKnownColour : o.idUnknownColour;
       const TMrptInverseDepth mp = inverseDepthToMrpt(d);
       const Mat3 M = mrptEllipsoidCovariance(mp.cov);
-      if (!M.isZero(0))
-      {
-        auto e = mo::CEllipsoidInverseDepth3D::Create();
-        e->setName("map_id_" + id);
-        e->setPose(mp.pose);
-        mrpt::math::CMatrixDouble33 cov;
-        mrpt::math::CMatrixDouble31 mean;
-        for (int r = 0; r < 3; ++r)
-        {
-          mean[r] = mp.mean[r];
-          for (int k = 0; k < 3; ++k) cov(r, k) = M(r, k);
-        }
-        e->setCovMatrixAndMean(cov, mean);
-        e->setQuantiles(static_cast<float>(o.nSigmas));
-        e->setUnderflowMaxRange(static_cast<float>(underflowRange));
-        e->setNumberOfSegments(seg);
-        e->setColor_u8(toMrptColour(col, 200));
-        e->setLineWidth(1.0f);
-        ellipsoids.push_back(e);
-      }
+      if (!M.isZero(0)) ellipsoids.push_back(inverseDepthEllipsoid(mp, M, col, id, underflowRange, o));
       if (f.depthKnown)
       {
         const Vec3 p = d.rho > 0 ? Vec3(d.anchor_W + m / d.rho) : f.p_W;
@@ -223,18 +244,7 @@ void addMap(mo::CSetOfObjects& world, const TSceneContent& c, double rayLength,
       xyz->push_back(f.p_W[0], f.p_W[1], f.p_W[2], kx[0], kx[1], kx[2]);
       const Mat3 M = mrptEllipsoidCovariance(f.cov_W);
       if (M.isZero(0)) continue;
-      auto e = mo::CEllipsoid3D::Create();
-      e->setName("map_xyz_" + id);
-      e->setLocation(f.p_W[0], f.p_W[1], f.p_W[2]);
-      mrpt::math::CMatrixDouble33 cov;
-      for (int r = 0; r < 3; ++r)
-        for (int k = 0; k < 3; ++k) cov(r, k) = M(r, k);
-      e->setCovMatrix(cov);
-      e->setQuantiles(static_cast<float>(o.nSigmas));
-      e->setNumberOfSegments(seg);
-      e->setColor_u8(toMrptColour(o.xyzColour, 200));
-      e->setLineWidth(1.0f);
-      ellipsoids.push_back(e);
+      ellipsoids.push_back(xyzEllipsoid(f.p_W, M, id, o));
     }
   }
   map->insert(xyz);
@@ -282,6 +292,29 @@ void collect(const mo::CRenderizable::Ptr& obj, const std::string& prefix,
   if (auto g = std::dynamic_pointer_cast<mo::CSetOfObjects>(obj))
     for (const auto& child : *g) collect(child, prefix, out);
 }
+/** The grid plane of buildScene(): under everything drawn at finite distance, rays included. */
+mo::CRenderizable::Ptr gridPlane(const TSceneContent& c, const TBox3& box, double rayLength, const TSceneOptions& o)
+{
+  TBox3 g = box;
+  for (const auto& f : c.points)
+    if (!f.depthKnown && f.inverseDepth)
+      g.add(f.inverseDepth->anchor_W +
+            rayLength * math::Bearing::DirectionFromAngles(
+                            f.inverseDepth->theta, f.inverseDepth->phi));
+  const double gExtent = std::max(g.diagonal(), 1e-3);
+  const double spacing = o.gridSpacing > 0 ? o.gridSpacing : niceNumber(gExtent / 10.0);
+  const double y = std::isfinite(o.gridY) ? o.gridY : g.max.y() + 0.05 * gExtent;
+  const auto lo = [&](double v) { return std::floor(v / spacing) * spacing; };
+  const auto hi = [&](double v) { return std::ceil(v / spacing) * spacing; };
+  auto grid = mo::CGridPlaneXZ::Create(static_cast<float>(lo(g.min.x())),
+      static_cast<float>(hi(g.max.x())), static_cast<float>(lo(g.min.z())),
+      static_cast<float>(hi(g.max.z())), static_cast<float>(y), static_cast<float>(spacing),
+      1.0f, true);
+  grid->setName("grid");
+  grid->setColor_u8(toMrptColour(o.gridColour));
+  return grid;
+}
+
 }  // namespace
 
 mo::COpenGLScene::Ptr buildScene(const TSceneContent& c, const TSceneOptions& o)
@@ -308,28 +341,7 @@ mo::COpenGLScene::Ptr buildScene(const TSceneContent& c, const TSceneOptions& o)
   auto world = group("world");
   if (o.zUpDisplay) world->setPose(displayFromWorld());
 
-  if (o.showGrid)
-  {
-    // Under everything drawn at finite distance, rays included.
-    TBox3 g = box;
-    for (const auto& f : c.points)
-      if (!f.depthKnown && f.inverseDepth)
-        g.add(f.inverseDepth->anchor_W +
-              rayLength * math::Bearing::DirectionFromAngles(
-                              f.inverseDepth->theta, f.inverseDepth->phi));
-    const double gExtent = std::max(g.diagonal(), 1e-3);
-    const double spacing = o.gridSpacing > 0 ? o.gridSpacing : niceNumber(gExtent / 10.0);
-    const double y = std::isfinite(o.gridY) ? o.gridY : g.max.y() + 0.05 * gExtent;
-    const auto lo = [&](double v) { return std::floor(v / spacing) * spacing; };
-    const auto hi = [&](double v) { return std::ceil(v / spacing) * spacing; };
-    auto grid = mo::CGridPlaneXZ::Create(static_cast<float>(lo(g.min.x())),
-        static_cast<float>(hi(g.max.x())), static_cast<float>(lo(g.min.z())),
-        static_cast<float>(hi(g.max.z())), static_cast<float>(y), static_cast<float>(spacing),
-        1.0f, true);
-    grid->setName("grid");
-    grid->setColor_u8(toMrptColour(o.gridColour));
-    world->insert(grid);
-  }
+  if (o.showGrid) world->insert(gridPlane(c, box, rayLength, o));
   if (o.showOriginAxes)
   {
     auto ax = mo::stock_objects::CornerXYZSimple(static_cast<float>(axes), 2.0f);

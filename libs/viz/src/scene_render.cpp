@@ -185,12 +185,12 @@ bool offscreenRenderingAvailable(std::string* whyNot)
   }
 }
 
-bool renderScene(const mo::COpenGLScene& scene, int width, int height, const TRenderOptions& o,
-    cv::Mat& bgr, std::string* whyNot)
+namespace
 {
-  if (width <= 0 || height <= 0)
-    throw std::runtime_error("viz::renderScene: image size must be positive, got " +
-                             std::to_string(width) + "x" + std::to_string(height));
+/** The camera of renderScene(): looking at the scene's content box (or o.box) from the view's
+ * azimuth and elevation, at the distance that fits it in a width x height image. */
+mo::CCamera viewCamera(const mo::COpenGLScene& scene, int width, int height, const TRenderOptions& o)
+{
   TBox3 box = o.box ? *o.box : sceneContentBox(scene);
   if (box.empty()) box.add(Vec3::Zero());
   // A flat box (e.g. a planar trajectory seen from above) still needs some depth to fit.
@@ -220,6 +220,18 @@ bool renderScene(const mo::COpenGLScene& scene, int width, int height, const TRe
     cam.setProjectiveModel(true);
     cam.setProjectiveFOVdeg(static_cast<float>(fov));
   }
+
+  return cam;
+}
+}  // namespace
+
+bool renderScene(const mo::COpenGLScene& scene, int width, int height, const TRenderOptions& o,
+    cv::Mat& bgr, std::string* whyNot)
+{
+  if (width <= 0 || height <= 0)
+    throw std::runtime_error("viz::renderScene: image size must be positive, got " +
+                             std::to_string(width) + "x" + std::to_string(height));
+  const mo::CCamera cam = viewCamera(scene, width, height, o);
 
   std::unique_ptr<mo::CFBORender> render;
   try

@@ -140,6 +140,17 @@ class CIMMEstimator
    * m_modes[i].P is then stale storage, reused as mode i's output by the next mix(). */
   std::vector<int> m_alias;
   int root(int i) const { return m_alias[i] >= 0 ? m_alias[i] : i; }
+  // The steps of mix() (CIMMEstimator.cpp), on the m_mix* buffers below:
+  /** Split of the mixing weights into the common terms of each support group and the own terms. */
+  void splitMixingWeights(const MatX& pi);
+  /** The mixed means and the spreads around xm (m_mixXm, m_mixY, m_mixMuYT(g), m_mixXbar, m_mixYbar). */
+  void mixMeans(Eigen::Index n);
+  /** Output storage and order (m_mixOrder); true when the covariances are mixed in place. */
+  bool prepareMixOutputs(Eigen::Index n);
+  /** Column col (rows col..n) of every output covariance; t: the chunk (its m_mixU columns). */
+  void mixColumn(Eigen::Index n, Eigen::Index col, int t, int nGroups, bool inplace);
+  /** Rows [c0, c1) of the outputs' upper triangles, mirrored from their lower columns. */
+  void mirrorChunk(Eigen::Index n, Eigen::Index c0, Eigen::Index c1, bool inplace, const std::vector<char>* lowerOnly);
   /** Gives mode i its own copy of the covariance it shares. */
   void unalias(int i);
   std::atomic<int> m_numAliased{0};  ///< modes with m_alias >= 0 (write access locks only when > 0)

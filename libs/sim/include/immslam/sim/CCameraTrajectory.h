@@ -84,6 +84,9 @@ class CCameraTrajectory
   };
 
   const TSpan& spanAt(double t) const;
+  /** m_spans: the scenario's segments, consecutive ones of one type merged, with their ramps placed
+   * inside the more-moving segment and the clocks at their starts. */
+  void buildSpans(const TScenario& sc);
   /** Path value x(tau) and its derivative dx/dtau. */
   static void path(const TSignal& s, double tau, Vec3& x, Vec3* dx);
 

@@ -72,6 +72,11 @@ class CRenderer
   struct THit;
   std::vector<TInstance> prepare(const std::vector<TBox>& boxes, const TPose& T_W_C) const;
   static bool intersect(const std::vector<TInstance>& inst, std::uint64_t candidates, const Vec3& b_C, THit& hit);
+  /** Per image tile, the boxes that may be seen in it (bit i = box i; the room is always the
+   * fallback). */
+  std::vector<std::uint64_t> tileCandidates(const std::vector<TInstance>& inst) const;
+  /** The 8-bit image of the linear radiance `value` (1 or 3 channels), with the options' pixel noise. */
+  cv::Mat quantized(const cv::Mat& value, bool colour, const TRenderOptions& opts) const;
 
   camera::CCameraModel::Ptr m_cam;
   int m_w, m_h, m_threads;

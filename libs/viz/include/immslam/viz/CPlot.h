@@ -87,6 +87,20 @@ class CPlot
   void save(const std::string& png) const;
 
  private:
+  struct TLayout;  ///< plot area, axes, legend (CPlot.cpp)
+  /** The x and y ranges of the data (finite points; y > 0 on a log axis). */
+  void dataRanges(double& x0, double& x1, double& y0, double& y1) const;
+  /** The legend's items and the band's categories into L. */
+  void legendItems(TLayout& L) const;
+  /** The layout for data in [x0, x1] x [y0, y1]: axes, plot area, legend. */
+  TLayout layout(double x0, double x1, double y0, double y1) const;
+  /** Grid, stacked areas and lines inside the plot area. */
+  void drawData(cv::Mat& img, const TLayout& L) const;
+  /** Frame, ticks and their labels, the band, axis labels and title. */
+  void drawAxes(cv::Mat& img, const TLayout& L) const;
+  /** The legend box. */
+  void drawLegend(cv::Mat& img, const TLayout& L) const;
+
   struct TArea
   {
     std::vector<double> x;

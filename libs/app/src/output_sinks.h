@@ -1,0 +1,190 @@
+/* imm-monoslam — private to libs/app: the writers of a run, one IFrameSink each (CRunOutputs picks
+ * and orders them): the per-frame files, the run's statistics, the final bundle adjustment, the
+ * overlays, the live windows, the scenes, the plots, the progress line. */
+#pragma once
+
+#include <immslam/app/CLiveView.h>
+#include <immslam/app/COutputFiles.h>
+#include <immslam/app/app_options.h>
+#include <immslam/eval/search_nis.h>
+#include <immslam/viz/COverlayWriter.h>
+#include <immslam/viz/scene.h>
+
+#include "CTrajectorySmoothing.h"
+#include "IFrameSink.h"
+#include "run_inputs.h"
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace immslam::sim
+{
+class CSyntheticSource;
+}
+
+namespace immslam::app::detail
+{
+/** trajectory.txt, model_probabilities.csv, frame_stats.csv, ... every frame; map.csv at the end.
+ * Its trajectory is the one the other writers read: it comes first. */
+class CFilesSink : public IFrameSink
+{
+ public:
+  CFilesSink(const TRunContext& ctx, const TRunInputs& in, const system::CMonoSlamSystem& sys);
+  void onFrame(const TFrameResult& r) override;
+  void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
+  const COutputFiles& files() const { return m_files; }
+
+ private:
+  COutputFiles m_files;
+};
+
+/** The summary's figures: frame times and match counts, final map size, the ATE against the
+ * input's ground truth; warnings for frames without mask or known tracks. */
+class CStatisticsSink : public IFrameSink
+{
+ public:
+  CStatisticsSink(const TRunContext& ctx, const TRunInputs& in, const core::TTrajectory& trajectory);
+  void onFrame(const TFrameResult& r) override;
+  void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
+
+ private:
+  const TRunContext& m_ctx;
+  const TRunInputs& m_in;
+  const core::TTrajectory& m_trajectory;
+  std::vector<double> m_frameMs, m_matched;  ///< per processed frame
+};
+
+/** [output] refine_trajectory: the inlier matches of every frame, then trajectory_refined.txt, a
+ * bundle adjustment of them started at the filter's trajectory (and its ATE). */
+class CRefineSink : public IFrameSink
+{
+ public:
+  CRefineSink(const TRunContext& ctx, const TRunInputs& in, const COutputFiles& files);
+  void onFrame(const TFrameResult& r) override;
+  void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
+
+ private:
+  const TRunContext& m_ctx;
+  const TRunInputs& m_in;
+  const COutputFiles& m_files;
+  std::vector<eval::TSearchRow> m_rows;  ///< matches used in the updates
+};
+
+/** [output] smooth_trajectory: the online keyframe smoother (its own thread; this writer only hands
+ * each frame's pose and matches over) and trajectory_smoothed.txt at the end. */
+class CSmoothingSink : public IFrameSink
+{
+ public:
+  CSmoothingSink(const TRunInputs& in, const COutputFiles& files, mrpt::system::COutputLogger& log);
+  void onFrame(const TFrameResult& r) override;
+  void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
+
+ private:
+  const TRunInputs& m_in;
+  const COutputFiles& m_files;
+  mrpt::system::COutputLogger& m_log;
+  CTrajectorySmoothing m_smoothing;
+};
+
+/** The progress line on a terminal, at most every 0.2 s (frame, rate, map, matches, dominant model,
+ * time left when the input's size is known). */
+class CProgressSink : public IFrameSink
+{
+ public:
+  CProgressSink(const TRunSummary& summary, std::size_t total);
+  void onFrame(const TFrameResult& r) override;
+  void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  const TRunSummary& m_summary;
+  std::size_t m_total;  ///< the source's size hint (0: unknown)
+  Clock::time_point m_start, m_last;
+};
+
+/** The dynamic tracks seen so far (world positions by id), drawn in the scenes. */
+struct TTrackHistory
+{
+  std::map<std::int64_t, std::vector<Vec3>> lines;
+  /** Adds the measured shadow tracks of a frame. */
+  void add(const system::TSystemFrame& fr);
+};
+
+/** The scene of the current state: trajectory, camera, map with uncertainties, the dynamic tracks
+ * near the map. */
+viz::TSceneContent sceneContent(const slam::CMonoSlamIMM& slam, const core::TTrajectory& trajectory,
+                                const TTrackHistory& tracks, const std::string& title);
+
+/** [output] overlays, overlay_video: overlays/ and overlays.avi every overlay_every_n frames. */
+class COverlaySink : public IFrameSink
+{
+ public:
+  COverlaySink(const std::string& outDir, const TOutputOptions& opts);
+  void onFrame(const TFrameResult& r) override;
+  void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
+
+ private:
+  viz::COverlayWriter m_writer;
+  std::size_t m_everyN;
+};
+
+/** The live windows (CLiveView): the overlay every frame, the scene every gui_scene_every_n. */
+class CLiveViewSink : public IFrameSink
+{
+ public:
+  CLiveViewSink(const TOutputOptions& opts, const core::TTrajectory& trajectory);
+  void onFrame(const TFrameResult& r) override;
+  void onEnd(const slam::CMonoSlamIMM&, TRunSummary&) override {}
+
+ private:
+  CLiveView m_view;
+  std::size_t m_sceneEveryN;
+  const core::TTrajectory& m_trajectory;
+  TTrackHistory m_tracks;
+};
+
+/** [output] scene_every_n: scene_NNNNNN.3Dscene and .png; [output] scene: scene.3Dscene and
+ * scene.png at the end, with the ground truth aligned by the summary's ATE. */
+class CSceneSink : public IFrameSink
+{
+ public:
+  CSceneSink(const TRunContext& ctx, const TRunInputs& in, const core::TTrajectory& trajectory);
+  void onFrame(const TFrameResult& r) override;
+  void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
+
+ private:
+  const TRunContext& m_ctx;
+  const TRunInputs& m_in;
+  const core::TTrajectory& m_trajectory;
+  TTrackHistory m_tracks;
+};
+
+/** [output] plots: model_probabilities.png (the IMM paper's Fig. 4, with the true motion labels
+ * when the input knows them), model_probabilities_log.png, search_area.png, ate.png. */
+class CPlotSink : public IFrameSink
+{
+ public:
+  CPlotSink(const TRunContext& ctx, const TRunInputs& in, const slam::CMonoSlamIMM& slam);
+  void onFrame(const TFrameResult& r) override;
+  void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
+
+ private:
+  /** The true motion label of a frame, when the input knows it. */
+  void addLabel(const io::TFrame& frame);
+  /** model_probabilities.png, model_probabilities_log.png and search_area.png. */
+  void plotSeries() const;
+
+  const TRunContext& m_ctx;
+  const TRunInputs& m_in;
+  const sim::CSyntheticSource* m_synthetic;          ///< the source, when it is the renderer
+  std::map<long long, std::string> m_folderLabels;   ///< motion_labels.txt of a dataset folder
+  std::vector<std::string> m_labels;                 ///< true label per processed frame
+  std::vector<std::string> m_modelNames;
+  std::vector<double> m_times, m_areas;
+  std::vector<double> m_probs;  ///< model probabilities, one row of r per frame (row-major)
+};
+}  // namespace immslam::app::detail
