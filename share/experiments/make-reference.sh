@@ -23,19 +23,26 @@ fi
 mkdir -p "$OUT/images"
 grep -v '^#' "$DATA/rgb.txt" | while read -r ts f; do ln -sf "$DATA/$f" "$OUT/images/$(basename "$f")"; done
 THREADS=${THREADS:-2}
+if [[ "${SKIP_MATCHING:-0}" != 1 ]]; then
 rm -f "$OUT/database.db"
 colmap feature_extractor --database_path "$OUT/database.db" --image_path "$OUT/images" \
   --ImageReader.single_camera 1 --ImageReader.camera_model "$CAM_MODEL" --ImageReader.camera_params "$CAM_PARAMS" \
   --SiftExtraction.use_gpu 0 --SiftExtraction.num_threads "$THREADS" --SiftExtraction.max_num_features 4096 > "$OUT/colmap.log" 2>&1
 colmap sequential_matcher --database_path "$OUT/database.db" --SiftMatching.use_gpu 0 \
   --SiftMatching.num_threads "$THREADS" --SequentialMatching.overlap "${OVERLAP:-15}" --SequentialMatching.loop_detection 0 >> "$OUT/colmap.log" 2>&1
-mkdir -p "$OUT/sparse"
+fi
+rm -rf "$OUT/sparse"; mkdir -p "$OUT/sparse"
 colmap mapper --database_path "$OUT/database.db" --image_path "$OUT/images" --output_path "$OUT/sparse" \
   --Mapper.num_threads "$THREADS" --Mapper.ba_refine_focal_length "$REFINE" --Mapper.ba_refine_extra_params "$REFINE" \
-  --Mapper.ba_refine_principal_point 0 --Mapper.multiple_models 0 >> "$OUT/colmap.log" 2>&1
-# The largest model (mapper numbers them 0, 1, ...; with multiple_models 0 there is one).
-MODEL_DIR="$OUT/sparse/0"
-colmap model_converter --input_path "$MODEL_DIR" --output_path "$MODEL_DIR" --output_type TXT >> "$OUT/colmap.log" 2>&1
+  --Mapper.ba_refine_principal_point 0 --Mapper.multiple_models 1 --Mapper.init_min_tri_angle 4 >> "$OUT/colmap.log" 2>&1
+# The largest model (a slow start can make the mapper begin more than one).
+MODEL_DIR=""; BEST=0
+for d in "$OUT"/sparse/*/; do
+  colmap model_converter --input_path "$d" --output_path "$d" --output_type TXT >> "$OUT/colmap.log" 2>&1
+  n=$(grep -v '^#' "$d/images.txt" | grep -c . || true)
+  if (( n > BEST )); then BEST=$n; MODEL_DIR=${d%/}; fi
+done
+[[ -n "$MODEL_DIR" ]] || { echo "make-reference: COLMAP made no model (see $OUT/colmap.log)" >&2; exit 1; }
 python3 - "$DATA/rgb.txt" "$MODEL_DIR" "$OUT" <<'PY'
 import sys, math
 rgb, model, out = sys.argv[1:4]
