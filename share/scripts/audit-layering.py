@@ -24,6 +24,8 @@ import shutil
 import sys
 import tempfile
 
+from cxx_source import blank
+
 MODULES = ("slam", "shadow", "bayes", "motion")
 HIGHER = ("frontend", "tracking", "system", "app", "viz", "io", "sim", "eval")
 INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]')
@@ -45,31 +47,6 @@ FORBIDDEN_LINKS = [
 ]
 
 
-def strip_code(text):
-    """Comments and string/char literals blanked, line breaks kept (line numbers stay right)."""
-    out, i, n = [], 0, len(text)
-    while i < n:
-        c = text[i]
-        if text.startswith("//", i):
-            j = text.find("\n", i)
-            i = n if j < 0 else j
-        elif text.startswith("/*", i):
-            j = text.find("*/", i + 2)
-            j = n if j < 0 else j + 2
-            out.append("\n" * text.count("\n", i, j))
-            i = j
-        elif c in "\"'":
-            j = i + 1
-            while j < n and text[j] != c and text[j] != "\n":
-                j += 2 if text[j] == "\\" else 1
-            out.append(c + c)
-            i = j + 1
-        else:
-            out.append(c)
-            i += 1
-    return "".join(out)
-
-
 def audit_sources(root, mod):
     found = []
     for sub in ("src", "include"):
@@ -87,7 +64,7 @@ def audit_sources(root, mod):
                     for pat, what in FORBIDDEN_INCLUDES:
                         if pat.search(m.group(1)):
                             found.append(f"{rel}:{no}: {what}: {line.strip()}")
-            for no, line in enumerate(strip_code(text).split("\n"), 1):
+            for no, line in enumerate(blank(text).split("\n"), 1):
                 if INCLUDE.match(line):
                     continue
                 for pat, what in FORBIDDEN_CODE:
