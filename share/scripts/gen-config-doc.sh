@@ -23,7 +23,10 @@ printf '[input]\n' > "$TMP/empty.ini"
   echo
   echo "The defaults are the recommended configuration (\`ini/imm7-shadow.ini\` only names its defining keys)."
   echo "A config written for an older version that holds a removed or moved key stops with an error naming"
-  echo "the key and what replaced it (for example \`[shadow] min_ncc: moved to [search] min_ncc\`)."
+  echo "the key and what replaced it (for example \`[shadow] min_ncc: moved to [search] min_ncc\`). The keys are those a"
+  echo "user turns; the algorithms' tuning internals (RANSAC probabilities, deletion rule, relocalisation counts,"
+  echo "the shadow filter's decision rule, ...) are named constants in the code (doc/estimator.md, doc/shadow.md):"
+  echo "a config that sets one stops with \`removed: internal constant (VALUE; DOC)\`."
   "$BIN" "$TMP/empty.ini" --print-config | awk '
     /^\[/ { sec=$0; gsub(/[\[\]]/, "", sec); printf "\n## [%s]\n\n| key | default | meaning |\n|---|---|---|\n", sec; next }
     /=/ {

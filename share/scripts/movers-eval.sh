@@ -7,7 +7,7 @@
 # Usage: share/scripts/movers-eval.sh SCENARIO.ini [BUILD_DIR] [OUT_DIR] [SEED...]
 #        (default build, /tmp/movers-eval, seeds 101..140)
 # Environment: CONFIG (default ini/imm7-shadow.ini), BASE_CONFIG (default ini/imm7.ini), SET (extra
-#   imm-monoslam options for both, e.g. "--set shadow.alpha=0.05"), APP (the imm-monoslam to run,
+#   imm-monoslam options for both, e.g. "--set system.watch_features=10"), APP (the imm-monoslam to run,
 #   default BUILD_DIR/bin/imm-monoslam: another build on the same renders).
 set -euo pipefail
 cd "$(dirname "$0")/../.."

@@ -819,15 +819,17 @@ TEST(RobustConfig, NanNegativeAndZeroNoiseAreRejectedNamingTheKey)
       {"slam.sigma_pixel=inf", "[slam] sigma_pixel"},
       {"slam.init_rho_std=-1", "[slam] init_rho_std"},
       {"slam.init_rho_std=nan", "[slam] init_rho_std"},
-      {"slam.init_linear_velocity_std_px=-5", "[slam] init_linear_velocity_std_px"},
-      {"slam.init_angular_velocity_std_px=nan", "[slam] init_angular_velocity_std_px"},
+      {"slam.init_linear_velocity_std_px=-5", "[slam] init_linear_velocity_std_px: removed: internal constant"},
+      {"slam.max_sigma_pixel=nan", "[slam] max_sigma_pixel"},
+      {"slam.max_sigma_pixel=0.1", "[slam] max_sigma_pixel"},
       {"imm.models=general:nan", "[imm] models"},
       {"imm.models=general:-1", "[imm] models"},
       {"imm.models=general:0", "[imm] models"},
       {"imm.models=rotation:inf", "[imm] models"},
       {"imm.models=general:1e400", "[imm] models"},
-      {"imm.transition_stay=nan", "[imm] transition_stay"},
-      {"imm.transition_stay=-0.1", "[imm] transition_stay"},
+      {"imm.transition_stay=0.99", "[imm] transition_stay: removed"},
+      {"imm.dormant_below=nan", "[imm] dormant_below"},
+      {"imm.dormant_below=-0.1", "[imm] dormant_below"},
       {"imm.general_entry=evidence", "[imm] general_entry: removed"},
       {"imm.models=stationary:0.1 general:1", "[imm] models"},
       {"shadow.sigma_pixel=2", "[shadow] sigma_pixel: removed: both filters use [slam] sigma_pixel"},
@@ -836,8 +838,10 @@ TEST(RobustConfig, NanNegativeAndZeroNoiseAreRejectedNamingTheKey)
       {"search.patch_half_size=1", "[search] patch_half_size"},
       {"imm.shake_px=nan", "[imm] shake_px"},
       {"imm.shake_px=-0.1", "[imm] shake_px"},
-      {"imm.probability_floor=nan", "[imm] probability_floor"},
-      {"imm.probability_floor=-1", "[imm] probability_floor"},
+      {"imm.probability_floor=1e-4", "[imm] probability_floor: removed: internal constant"},
+      {"shadow.alpha=0.01", "[shadow] alpha: removed: internal constant"},
+      {"ransac.max_hypotheses=100", "[ransac] max_hypotheses: removed: internal constant"},
+      {"shadow.sigma_accel_px=-1", "[shadow] sigma_accel_px"},
       {"imm.prior=[nan 0 0 0 0 0 1]", "[imm] prior"},
       {"imm.prior=[-1 1 1 0 0 0 0]", "[imm] prior"},
       {"system.pending_weight=nan", "[system] pending_weight"},
@@ -871,7 +875,7 @@ TEST(RobustConfig, AbsurdButValidValuesFailCleanlyOrRun)
   // Values that pass validation but break the numerics: the run must end with a message naming
   // the frame (status 1) or run; never crash, and every output line written is well formed.
   const std::string d = freshDir("absurd_values");
-  for (const std::string set : {"slam.init_linear_velocity_std_px=1e300", "imm.models=general:1e300",
+  for (const std::string set : {"imm.shake_px=100", "imm.models=general:1e300",
                                 "slam.sigma_pixel=1e-300", "slam.sigma_pixel=1e5", "slam.init_rho=0",
                                 "slam.init_rho=1e300"})
   {

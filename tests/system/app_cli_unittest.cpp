@@ -42,6 +42,18 @@ TEST(AppConfig, CodeDefaultsAreTheRecommendedConfiguration)
   fromShipped.getContent(b);
   EXPECT_GT(a.size(), 1000u);
   EXPECT_EQ(a, b);
+  // The internal constants that replaced removed keys are the options' defaults (the library's defaults
+  // are the configuration's).
+  const slam::CSlamTracker::TOptions so;
+  EXPECT_EQ(so.adaptive_noise_rate, so.kAdaptiveNoiseRate);
+  EXPECT_EQ(so.delete_min_predictions, so.kDeleteMinPredictions);
+  EXPECT_EQ(so.relocalise_max_frames, so.kRelocaliseMaxFrames);
+  EXPECT_EQ(slam::TIMMBankOptions().transition_stay, slam::TIMMBankOptions::kTransitionStay);
+  EXPECT_EQ(slam::COnePointRansac::TOptions().max_hypotheses, slam::COnePointRansac::TOptions::kMaxHypotheses);
+  const shadow::CShadowFilter::TOptions sh;
+  EXPECT_EQ(sh.alpha, sh.kAlpha);
+  EXPECT_EQ(sh.static_power, sh.kStaticPower);
+  EXPECT_EQ(sh.max_pending_frames, sh.kMaxPendingFrames);
 }
 
 TEST(AppConfig, RemovedKeysNameWhatReplacedThem)
@@ -55,7 +67,31 @@ TEST(AppConfig, RemovedKeysNameWhatReplacedThem)
     ASSERT_TRUE(known.count(section)) << key;
     EXPECT_EQ(known.at(section).count(name), 0u) << key << " is still a key";
   }
-  EXPECT_GE(system::CMonoSlamSystem::removedKeys().size(), 20u);
+  EXPECT_GE(system::CMonoSlamSystem::removedKeys().size(), 50u);
+  // The tuning internals made constants (issue 28: about 60 keys, each one a user would turn).
+  for (const char* key : {"[slam] adaptive_noise_rate", "[slam] min_sigma_pixel", "[slam] init_linear_velocity_std_px",
+                          "[slam] expand_search_factor", "[slam] min_shi_tomasi", "[slam] delete_min_match_ratio",
+                          "[slam] linearity_threshold", "[slam] relocalise_patience", "[imm] transition_stay",
+                          "[imm] probability_floor", "[ransac] max_hypotheses", "[shadow] alpha",
+                          "[shadow] static_power", "[shadow] dynamic_max_missed_frames"})
+  {
+    ASSERT_TRUE(system::CMonoSlamSystem::removedKeys().count(key)) << key;
+    EXPECT_EQ(system::CMonoSlamSystem::removedKeys().at(key).rfind("removed: internal constant (", 0) == 0 ||
+                  system::CMonoSlamSystem::removedKeys().at(key).find("transition_matrix") != std::string::npos,
+              true)
+        << key;
+  }
+  std::size_t keys = 0;
+  for (const auto& [section, names] : system::CMonoSlamSystem::knownKeys()) keys += names.size();
+  EXPECT_LE(keys, 40u) << "estimator keys ([input] and [output] aside)";
+  // An old config with a removed internal stops naming the key and what replaced it.
+  const std::string dir = outDir("removed_internal");
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/old.ini") << "[shadow]\nalpha = 0.05\n";
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(runApp({dir + "/old.ini", "--out", dir + "/out"}), 1);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find(dir + "/old.ini: [shadow] alpha: removed: internal constant (0.05"), std::string::npos) << err;
 }
 
 TEST(AppCli, BadConfigAndInputExitWithOne)

@@ -8,38 +8,14 @@ namespace immslam::shadow
 {
 void CShadowFilter::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-  IMMSLAM_LOAD_DOUBLE(init_velocity_std_px);
   IMMSLAM_LOAD_DOUBLE(sigma_accel_px);
-  IMMSLAM_LOAD_DOUBLE(alpha);
-  IMMSLAM_LOAD_INT(min_test_frames);
-  IMMSLAM_LOAD_INT(dynamic_rejections);
-  IMMSLAM_LOAD_INT(dynamic_window);
-  IMMSLAM_LOAD_INT(static_acceptances);
-  IMMSLAM_LOAD_INT(static_min_frames);
-  IMMSLAM_LOAD_DOUBLE(static_min_velocity_px);
-  IMMSLAM_LOAD_DOUBLE(static_power);
-  IMMSLAM_LOAD_INT(max_pending_frames);
-  IMMSLAM_LOAD_INT(max_missed_frames);
-  IMMSLAM_LOAD_INT(dynamic_max_missed_frames);
   IMMSLAM_LOAD_INT(max_features);
   validate(s);
 }
 
 void CShadowFilter::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
 {
-  MRPT_SAVE_CONFIG_VAR_COMMENT(init_velocity_std_px, "feature velocity prior std (px/frame at unit depth)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(sigma_accel_px, "feature acceleration noise (px/frame^2 at unit depth)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(alpha, "significance of the three-ray test (static features called dynamic per test)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(min_test_frames, "first test once a feature's views span this many frames");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(dynamic_rejections, "dynamic when this many of the last dynamic_window tests reject");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(dynamic_window, "the number of recent tests dynamic_rejections counts in");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(static_acceptances, "static needs this many consecutive accepted tests,");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(static_min_frames, "a track spanning at least this many frames,");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(static_min_velocity_px, "and power against motions of this image speed (px/frame)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(static_power, "detection probability that defines that power");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(max_pending_frames, "undecided features are dropped after this many frames");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(max_missed_frames, "pending features dropped after this many misses in a row");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(dynamic_max_missed_frames, "dynamic features dropped after this many misses in a row");
   MRPT_SAVE_CONFIG_VAR_COMMENT(max_features, "maximum number of features held");
 }
 

@@ -259,17 +259,19 @@ TEST(ShadowOptions, LoadSaveAndErrors)
 {
   CShadowFilter::TOptions o;
   mrpt::config::CConfigFileMemory c;
-  o.alpha = 0.01;
-  o.static_acceptances = 7;
+  o.sigma_accel_px = 0.25;
+  o.max_features = 70;
   o.saveToConfigFile(c, "shadow");
   std::string text;
   c.getContent(text);  // (MRPT 2.5.8's CConfigFileMemory does not read back its own writes)
   CShadowFilter::TOptions o2;
   o2.loadFromConfigFile(mrpt::config::CConfigFileMemory(text), "shadow");
-  EXPECT_EQ(o2.alpha, 0.01);
-  EXPECT_EQ(o2.static_acceptances, 7);
-  EXPECT_EQ(core::knownKeys(o, "shadow").size(), 14u);  // noise, prior and search come from [slam] and [search]
-  EXPECT_THROW(o2.loadFromConfigFile(mrpt::config::CConfigFileMemory("[shadow]\nalpha = 0.9\n"), "shadow"),
+  EXPECT_EQ(o2.sigma_accel_px, 0.25);
+  EXPECT_EQ(o2.max_features, 70);
+  // Noise, prior and search come from [slam] and [search]; the classifier's and the track management's
+  // internals are constants (TOptions::k*), not keys.
+  EXPECT_EQ(core::knownKeys(o, "shadow").size(), 2u);
+  EXPECT_THROW(o2.loadFromConfigFile(mrpt::config::CConfigFileMemory("[shadow]\nmax_features = 0\n"), "shadow"),
                std::runtime_error);
   EXPECT_THROW(o2.loadFromConfigFile(mrpt::config::CConfigFileMemory("[shadow]\nsigma_accel_px = abc\n"), "shadow"),
                std::runtime_error);

@@ -10,18 +10,12 @@ namespace immslam::slam
 void COnePointRansac::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
   IMMSLAM_LOAD_DOUBLE(inlier_threshold_px);
-  IMMSLAM_LOAD_DOUBLE(success_probability);
-  IMMSLAM_LOAD_INT(max_hypotheses);
-  IMMSLAM_LOAD_DOUBLE(rescue_probability);
   validate(s);
 }
 
 void COnePointRansac::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const
 {
   MRPT_SAVE_CONFIG_VAR_COMMENT(inlier_threshold_px, "pixels: a match supports a hypothesis if closer than this");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(success_probability, "probability of drawing at least one all-inlier hypothesis");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(max_hypotheses, "upper bound of the adaptive number of hypotheses");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(rescue_probability, "chi-square(2) gate of the high-innovation inlier rescue");
 }
 
 void COnePointRansac::TOptions::validate(const std::string& s) const

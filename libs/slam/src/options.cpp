@@ -11,9 +11,7 @@ void TIMMBankOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c,
 {
   IMMSLAM_LOAD_STRING(models);
   IMMSLAM_LOAD_VECTOR(transition_matrix);
-  IMMSLAM_LOAD_DOUBLE(transition_stay);
   IMMSLAM_LOAD_VECTOR(prior);
-  IMMSLAM_LOAD_DOUBLE(probability_floor);
   IMMSLAM_LOAD_DOUBLE(dormant_below);
   IMMSLAM_LOAD_DOUBLE(shake_px);
   core::requireInRange(shake_px, 0, 100, s, "shake_px");
@@ -41,11 +39,9 @@ void TIMMBankOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const s
   c.write(s, "models", models, mrpt::config::MRPT_SAVE_NAME_PADDING(), mrpt::config::MRPT_SAVE_VALUE_PADDING(),
           "stationary | rotation:SIGMA_PX | general:SIGMA_PX[:SIGMA_ANG_PX] (noise in px; the shake of every model is shake_px)");
   c.write(s, "transition_matrix", joinNumbers(transition_matrix), mrpt::config::MRPT_SAVE_NAME_PADDING(),
-          mrpt::config::MRPT_SAVE_VALUE_PADDING(), "r x r Markov matrix, row-major, rows sum to 1 ([] = from transition_stay)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(transition_stay, "diagonal of the default Markov matrix");
+          mrpt::config::MRPT_SAVE_VALUE_PADDING(), "r x r Markov matrix, row-major, rows sum to 1 ([] = 0.995 on the diagonal, no switch into a general mode)");
   c.write(s, "prior", joinNumbers(prior), mrpt::config::MRPT_SAVE_NAME_PADDING(), mrpt::config::MRPT_SAVE_VALUE_PADDING(),
           "initial model probabilities ([] = uniform)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(probability_floor, "lower bound of every model probability");
   MRPT_SAVE_CONFIG_VAR_COMMENT(dormant_below, "modes below this probability given the frame are not updated (0 = exact IMM)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(shake_px, "zero-mean angular shake of the camera in every model, px per frame (random walk; 0 = none)");
 }

@@ -117,6 +117,41 @@ const std::map<std::string, std::string>& CMonoSlamSystem::removedKeys()
     m["[shadow] ekf_iterations"] = "removed: the shadow filter makes one EKF update per frame";
     m["[shadow] id_offset"] = "removed: the system numbers the features of both filters";
     m["[shadow] min_inverse_distance"] = "removed: a fixed clamp (1e-3) places tracks at infinity";
+    // Tuning internals nobody outside the algorithm turns: constants at their former defaults (the k*
+    // constants beside the option fields).
+    const auto internal = [&m](const std::string& key, const std::string& what) {
+      m[key] = "removed: internal constant (" + what + ")";
+    };
+    internal("[slam] adaptive_noise_rate", "0.05; doc/estimator.md");
+    internal("[slam] min_sigma_pixel", "0.25 px; [slam] max_sigma_pixel remains");
+    internal("[slam] init_linear_velocity_std_px", "5 px/frame; doc/estimator.md");
+    internal("[slam] init_angular_velocity_std_px", "5 px/frame; doc/estimator.md");
+    internal("[slam] expand_search_factor", "2; doc/estimator.md");
+    internal("[slam] expand_below_fraction", "0.5; doc/estimator.md");
+    internal("[slam] min_corner_distance_px", "12 px; doc/estimator.md");
+    internal("[slam] border_px", "10 px; doc/estimator.md");
+    internal("[slam] min_shi_tomasi", "0.01; doc/estimator.md");
+    internal("[slam] delete_min_predictions", "10, MonoSLAM's deletion rule; doc/estimator.md");
+    internal("[slam] delete_min_match_ratio", "0.5, MonoSLAM's deletion rule; doc/estimator.md");
+    internal("[slam] linearity_threshold", "0.1; doc/estimator.md");
+    internal("[slam] relocalise_min_inliers", "8; doc/estimator.md, Relocalisation");
+    internal("[slam] relocalise_max_frames", "90; doc/estimator.md, Relocalisation");
+    internal("[slam] relocalise_patience", "5; doc/estimator.md, Relocalisation");
+    internal("[slam] relocalise_after_gap", "10 frame periods; doc/estimator.md, Relocalisation");
+    m["[imm] transition_stay"] = "removed: the default Markov matrix has 0.995 on the diagonal (doc/imm.md); give any "
+                                 "other matrix with [imm] transition_matrix";
+    internal("[imm] probability_floor", "1e-4; doc/imm.md");
+    internal("[ransac] success_probability", "0.99; doc/estimator.md, 1-point RANSAC");
+    internal("[ransac] max_hypotheses", "200; doc/estimator.md, 1-point RANSAC");
+    internal("[ransac] rescue_probability", "0.99; doc/estimator.md, 1-point RANSAC");
+    internal("[shadow] init_velocity_std_px", "5 px/frame; doc/shadow.md");
+    const std::pair<const char*, const char*> shadowInternals[] = {
+        {"alpha", "0.05"}, {"min_test_frames", "3"}, {"dynamic_rejections", "5"}, {"dynamic_window", "5"},
+        {"static_acceptances", "5"}, {"static_min_frames", "10"}, {"static_min_velocity_px", "1 px/frame"},
+        {"static_power", "0.95"}, {"max_pending_frames", "150"}, {"max_missed_frames", "5"},
+        {"dynamic_max_missed_frames", "10"}};
+    for (const auto& [k, v] : shadowInternals)
+      internal(std::string("[shadow] ") + k, std::string(v) + "; doc/shadow.md");
     return m;
   }();
   return removed;

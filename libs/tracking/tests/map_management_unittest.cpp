@@ -136,7 +136,7 @@ TEST(MapManagement, ConvertsToXyzExactlyBelowTheLinearityThreshold)
 
 TEST(IMMSlamBank, ProbabilityFloorHoldsAfterADecisiveFrame)
 {
-  // [imm] probability_floor reaches the bank: a stationary and a general mode, the camera moves 0.05
+  // TIMMBankOptions::probability_floor reaches the bank: a stationary and a general mode, the camera moves 0.05
   // sideways (10 px at the features' unit depth, sigma 1 px): the stationary mode's likelihood is
   // ~e^-300 of the general one's, so its posterior is the floor, 1e-4, exactly (not ~0), and the
   // general mode holds the rest.

@@ -70,7 +70,8 @@ class CShadowFilter
     double sigma_pixel = 1.0;            ///< measurement noise std (px)
     double init_rho = 1.0;               ///< prior mean of w = inverse distance (1 = unit distance)
     double init_rho_std = 1.0;           ///< prior std of w (its 95 % region includes 0 = infinity)
-    double init_velocity_std_px = 5.0;   ///< velocity prior std (px/frame at unit depth)
+    static constexpr double kInitVelocityStdPx = 5.0;  ///< velocity prior std (px/frame at unit depth)
+    double init_velocity_std_px = kInitVelocityStdPx;  ///< velocity prior std (px/frame at unit depth)
     double sigma_accel_px = 0.5;         ///< acceleration noise (px/frame^2 at unit depth)
     // -- Active search (the image side: CShadowTracker in libs/tracking)
     int patch_half_size = 5;             ///< 11x11 templates
@@ -78,20 +79,32 @@ class CShadowFilter
     double min_ncc = 0.8;                ///< correlation threshold of a match
     double search_probability = 0.95;    ///< probability of the search ellipse (2 dof)
     double max_search_half_extent_px = 60;
-    // -- Classifier (Sec. III-A)
-    double alpha = 0.05;                 ///< significance of the three-ray test (eq. 14)
-    int min_test_frames = 3;             ///< first test once the feature's views span this many frames
-    int dynamic_rejections = 5;          ///< dynamic when this many of ...
-    int dynamic_window = 5;              ///< ... the last this-many tests reject
-    int static_acceptances = 5;          ///< static: consecutive acceptances ...
-    int static_min_frames = 10;          ///< ... a track at least this long ...
-    double static_min_velocity_px = 1.0; ///< ... and power against this speed (px/frame at the point's distance)
-    double static_power = 0.95;          ///< ... with this detection probability
+    // -- Classifier (Sec. III-A). The k* constants are not configuration keys (the decision rule's
+    // internals, doc/shadow.md); the fields stay for tests and library users.
+    static constexpr double kAlpha = 0.05;              ///< significance of the three-ray test (eq. 14)
+    static constexpr int kMinTestFrames = 3;            ///< first test once the views span 3 frames
+    static constexpr int kDynamicRejections = 5;        ///< dynamic: 5 rejections ...
+    static constexpr int kDynamicWindow = 5;            ///< ... in the last 5 tests
+    static constexpr int kStaticAcceptances = 5;        ///< static: 5 consecutive acceptances ...
+    static constexpr int kStaticMinFrames = 10;         ///< ... a track of 10 frames ...
+    static constexpr double kStaticMinVelocityPx = 1.0; ///< ... power against 1 px/frame ...
+    static constexpr double kStaticPower = 0.95;        ///< ... with detection probability 0.95
+    double alpha = kAlpha;               ///< significance of the three-ray test (eq. 14)
+    int min_test_frames = kMinTestFrames;         ///< first test once the feature's views span this many frames
+    int dynamic_rejections = kDynamicRejections;  ///< dynamic when this many of ...
+    int dynamic_window = kDynamicWindow;          ///< ... the last this-many tests reject
+    int static_acceptances = kStaticAcceptances;  ///< static: consecutive acceptances ...
+    int static_min_frames = kStaticMinFrames;     ///< ... a track at least this long ...
+    double static_min_velocity_px = kStaticMinVelocityPx; ///< ... and power against this speed (px/frame at the point's distance)
+    double static_power = kStaticPower;  ///< ... with this detection probability
     bool static_power_worst_case = true; ///< ... in every direction (else on average over directions)
     // -- Management
-    int max_pending_frames = 150;        ///< undecided features are dropped after this many frames
-    int max_missed_frames = 5;           ///< pending features dropped after this many misses in a row
-    int dynamic_max_missed_frames = 10;  ///< dynamic features dropped after this many misses in a row
+    static constexpr int kMaxPendingFrames = 150;       ///< undecided features dropped after 150 frames
+    static constexpr int kMaxMissedFrames = 5;          ///< pending features dropped after 5 misses in a row
+    static constexpr int kDynamicMaxMissedFrames = 10;  ///< dynamic features dropped after 10 misses in a row
+    int max_pending_frames = kMaxPendingFrames;  ///< undecided features are dropped after this many frames
+    int max_missed_frames = kMaxMissedFrames;    ///< pending features dropped after this many misses in a row
+    int dynamic_max_missed_frames = kDynamicMaxMissedFrames;  ///< dynamic features dropped after this many misses in a row
     int max_features = 100;              ///< addFeatures refuses beyond this many held features
     double min_inverse_distance = 1e-3;  ///< w clamp when placing tracks in W
 

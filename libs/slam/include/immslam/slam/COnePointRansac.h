@@ -36,9 +36,14 @@ class COnePointRansac
   struct TOptions : public mrpt::config::CLoadableOptions
   {
     double inlier_threshold_px = 2.0;  ///< |z - h(x_hyp)| below this: supports the hypothesis
-    double success_probability = 0.99; ///< p in n_hyp = log(1-p)/log(1-eps)
-    int max_hypotheses = 200;          ///< upper bound on the adaptive number of hypotheses
-    double rescue_probability = 0.99;  ///< chi-square (2 dof) gate of the high-innovation rescue
+    // Not configuration keys (internal constants of 1-point RANSAC, Civera et al., JFR 2010; doc/estimator.md); the
+    // fields stay for tests and library users.
+    static constexpr double kSuccessProbability = 0.99;  ///< p of at least one all-inlier hypothesis
+    static constexpr int kMaxHypotheses = 200;           ///< cap of the adaptive number of hypotheses
+    static constexpr double kRescueProbability = 0.99;   ///< chi-square (2 dof) gate of the rescue
+    double success_probability = kSuccessProbability; ///< p in n_hyp = log(1-p)/log(1-eps)
+    int max_hypotheses = kMaxHypotheses;              ///< upper bound on the adaptive number of hypotheses
+    double rescue_probability = kRescueProbability;   ///< chi-square (2 dof) gate of the high-innovation rescue
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
     void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
     /** \throws std::runtime_error naming the key of a value out of range. */

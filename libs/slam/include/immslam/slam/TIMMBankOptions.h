@@ -16,6 +16,11 @@ namespace immslam::slam
 /** Motion model bank of the IMM (section [imm]). */
 struct TIMMBankOptions : public mrpt::config::CLoadableOptions
 {
+  /** Diagonal of the default Markov matrix (eq. 7's pi; not a configuration key: [imm] transition_matrix
+   * gives any other matrix). */
+  static constexpr double kTransitionStay = 0.995;
+  /** Floor of every model probability (not a configuration key; doc/imm.md). */
+  static constexpr double kProbabilityFloor = 1e-4;
   /** Space-separated model specs: `stationary`, `rotation:SIGMA_ANG_PX`,
    * `general:SIGMA_PX` or `general:SIGMA_LIN_PX:SIGMA_ANG_PX`. */
   std::string models = "stationary rotation:0.1 rotation:0.5 rotation:1 general:0.1 general:0.5 general:1";
@@ -28,11 +33,11 @@ struct TIMMBankOptions : public mrpt::config::CLoadableOptions
    * mode with v = 0 and zero variance would pull its velocity, which carries the scale of a monocular
    * map, back to 0 every frame) and takes over by the likelihood of the measurements from the
    * probability floor (doc/imm.md, "Entering the general modes"). */
-  double transition_stay = 0.995;
+  double transition_stay = kTransitionStay;
   /** Initial model probabilities (empty: uniform). */
   std::vector<double> prior;
   /** Lower bound of every model probability (no model dies for ever). */
-  double probability_floor = 1e-4;
+  double probability_floor = kProbabilityFloor;
   /** Dormant modes (a model-set adaptation in the spirit of Li's variable-structure IMM; 0 = the exact
    * IMM, every mode updated). After the likelihoods of the frame's low-innovation matches are known, a
    * mode whose probability given them, mu_{k|k-1} L^(1) normalized, is below this value is dormant for

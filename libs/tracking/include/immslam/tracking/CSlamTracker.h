@@ -50,34 +50,47 @@ class CSlamTracker
   {
     double sigma_pixel = 1.0;                   ///< image measurement noise (px); initial value if adaptive
     bool adaptive_pixel_noise = true;           ///< estimate the measurement noise online (CImmSlamFilter::adaptMeasurementNoise)
-    double adaptive_noise_rate = 0.05;          ///< weight of each frame's estimate (exponential forgetting)
-    double min_sigma_pixel = 0.25;              ///< bounds of the adaptive estimate (px)
+    // The fields below that are set to a k* constant are not configuration keys (internal constants,
+    // CMonoSlamSystem::removedKeys()); the fields stay for tests and library users.
+    static constexpr double kAdaptiveNoiseRate = 0.05;  ///< forgetting weight of the noise estimate (doc/estimator.md)
+    static constexpr double kMinSigmaPixel = 0.25;      ///< floor of the adaptive noise (px): sharp rendered images
+    double adaptive_noise_rate = kAdaptiveNoiseRate;    ///< weight of each frame's estimate (exponential forgetting)
+    double min_sigma_pixel = kMinSigmaPixel;    ///< bounds of the adaptive estimate (px)
     double max_sigma_pixel = 3.0;
     double init_rho = 1.0;                      ///< inverse-depth prior mean (dimensionless)
     double init_rho_std = 1.0;                  ///< inverse-depth prior std: 95 % region includes rho = 0
-    double init_linear_velocity_std_px = 5.0;   ///< initial v std (image px/frame at unit depth)
-    double init_angular_velocity_std_px = 5.0;  ///< initial w std (image px/frame)
+    static constexpr double kInitVelocityStdPx = 5.0;  ///< initial v and w std (px/frame; doc/estimator.md)
+    double init_linear_velocity_std_px = kInitVelocityStdPx;   ///< initial v std (image px/frame at unit depth)
+    double init_angular_velocity_std_px = kInitVelocityStdPx;  ///< initial w std (image px/frame)
     double frame_rate_hz = 0;                   ///< nominal frame rate; 0: from the first timestamps
     int patch_half_size = 5;                    ///< 11x11 templates
     bool warp_patches = true;                   ///< predict the patch appearance (affine warp)
     double min_ncc = 0.8;                       ///< correlation threshold of a match
     double search_probability = 0.95;           ///< search ellipse probability (2 dof)
     double max_search_half_extent_px = 60;      ///< clip of pathological search regions
-    double expand_search_factor = 2.0;          ///< expanded search: ellipse axes x this factor (1: off)...
-    double expand_below_fraction = 0.5;         ///< ...when fewer than this fraction of searches found a match
+    static constexpr double kExpandSearchFactor = 2.0;   ///< expanded search: ellipse axes times this...
+    static constexpr double kExpandBelowFraction = 0.5;  ///< ...when fewer than this fraction of searches succeed
+    double expand_search_factor = kExpandSearchFactor;   ///< expanded search: ellipse axes x this factor (1: off)...
+    double expand_below_fraction = kExpandBelowFraction; ///< ...when fewer than this fraction of searches found a match
     int fast_threshold = 20;
     int grid_cols = 8, grid_rows = 6;           ///< new features go to empty cells of this grid
-    double min_corner_distance_px = 12;
-    int border_px = 10;
-    double min_shi_tomasi = 0.01;
+    static constexpr double kMinCornerDistancePx = 12;  ///< new features at least this far from others (px)
+    static constexpr int kBorderPx = 10;                ///< no new features closer to the image border (px)
+    static constexpr double kMinShiTomasi = 0.01;       ///< floor of the normalised Shi-Tomasi response
+    double min_corner_distance_px = kMinCornerDistancePx;
+    int border_px = kBorderPx;
+    double min_shi_tomasi = kMinShiTomasi;
     int min_visible_features = 30;              ///< add features when fewer are predicted in view
     int max_new_features_per_frame = 10;
     int initial_features = 30;                  ///< features initialised at the first frame
     int max_map_features = 150;                 ///< bound of the map (oldest-unseen evicted beyond)
-    int delete_min_predictions = 10;            ///< MonoSLAM deletion rule: after this many searches...
-    double delete_min_match_ratio = 0.5;        ///< ...delete if matched/predicted is below this
+    static constexpr int kDeleteMinPredictions = 10;      ///< MonoSLAM's deletion rule (ref. [6]): after 10 searches...
+    static constexpr double kDeleteMinMatchRatio = 0.5;   ///< ...matched in fewer than half
+    static constexpr double kLinearityThreshold = 0.1;    ///< ID -> XYZ below this linearity index (ref. [3])
+    int delete_min_predictions = kDeleteMinPredictions;   ///< MonoSLAM deletion rule: after this many searches...
+    double delete_min_match_ratio = kDeleteMinMatchRatio; ///< ...delete if matched/predicted is below this
     bool convert_to_xyz = true;
-    double linearity_threshold = 0.1;           ///< ID -> XYZ when the linearity index is below (ref. [3])
+    double linearity_threshold = kLinearityThreshold;     ///< ID -> XYZ when the linearity index is below (ref. [3])
     /** Relocalisation (relocalise.h). A frame with fewer than 3 measurements used, or with a fifth or
      * less of its searches, while the map holds at least relocalise_min_inliers well-localised features
      * (XYZ, or inverse depth to 25 %) is a lost frame. While lost (up to
@@ -91,10 +104,14 @@ class CSlamTracker
      * relocalise_min_inliers corners) but give no pose: the camera is somewhere the map has never been
      * (or behind a textured occluder), and waiting would only delay the new map. */
     bool relocalise = true;
-    int relocalise_min_inliers = 8;
-    int relocalise_max_frames = 90;
-    double relocalise_after_gap = 10;
-    int relocalise_patience = 5;
+    static constexpr int kRelocaliseMinInliers = 8;      ///< PnP inliers that accept a relocalisation
+    static constexpr int kRelocaliseMaxFrames = 90;      ///< lost frames in a row during which the map is kept
+    static constexpr double kRelocaliseAfterGap = 10;    ///< a gap of this many frame periods: search for the map
+    static constexpr int kRelocalisePatience = 5;        ///< failed attempts (textured images) before giving the map up
+    int relocalise_min_inliers = kRelocaliseMinInliers;
+    int relocalise_max_frames = kRelocaliseMaxFrames;
+    double relocalise_after_gap = kRelocaliseAfterGap;
+    int relocalise_patience = kRelocalisePatience;
     int num_threads = 2;                        ///< worker threads for the bank (1: none)
     int seed = 1;                               ///< RANSAC random seed (determinism)
 
