@@ -107,8 +107,7 @@ TEST(AppCli, FieldOfViewGuessForAnInputWithoutCalibration)
 
   const std::string out = outDir("fov_60");
   app::TRunSummary s;
-  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", folder, "--fov", "60", "--out", out, "--no-gui", "--set",
-                    "output.plots=false"},
+  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", folder, "--fov", "60", "--out", out, "--no-gui"},
                    &s),
             0);
   EXPECT_EQ(s.framesProcessed, 12u);

@@ -117,6 +117,9 @@ const std::map<std::string, std::string>& CMonoSlamSystem::removedKeys()
     m["[shadow] ekf_iterations"] = "removed: the shadow filter makes one EKF update per frame";
     m["[shadow] id_offset"] = "removed: the system numbers the features of both filters";
     m["[shadow] min_inverse_distance"] = "removed: a fixed clamp (1e-3) places tracks at infinity";
+    m["[output] plots"] =
+        "removed: the run writes no pictures of its series; share/scripts/plot-run.py RUN_DIR draws them from "
+        "the run's CSV files";
     return m;
   }();
   return removed;
