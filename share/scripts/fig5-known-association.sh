@@ -18,7 +18,7 @@ SEEDS=("$@")
 mkdir -p "$OUT"
 PAPER=(--set input.known_association_robust=false --set input.known_association_first_map=static --set system.starved_below=0)
 run() {  # run NAME CONFIG DATA KINDS [args...]
-  "$BUILD/bin/imm-monoslam" "ini/$2.ini" "$3" --out "$OUT/out-$1" --no-gui --quiet --set output.plots=false \
+  "$BUILD/bin/imm-monoslam" "ini/$2.ini" "$3" --out "$OUT/out-$1" --no-gui --quiet \
     --set output.scene=false --set "input.known_association=$3/points_groundtruth.txt" \
     --set "input.known_association_kinds=$4" "${@:5}" | grep -o '= [0-9.]* % of path' | head -n 1 | tr -dc '0-9.'
 }

@@ -109,7 +109,7 @@ for l in "${LINES[@]}"; do
   rm -rf "$out"; mkdir -p "$out"
   # shellcheck disable=SC2086  # the case's options are words
   if ! "$APP" "$ROOT/ini/$cfg.ini" "$in_path" --out "$out" --no-gui --quiet \
-      --set output.scene=false --set output.plots=false --set slam.num_threads=2 $opts > "$out/run.log" 2>&1; then
+      --set output.scene=false --set slam.num_threads=2 $opts > "$out/run.log" 2>&1; then
     echo "golden: $name: imm-monoslam failed (log: $out/run.log)"; tail -n 5 "$out/run.log"; failed=$((failed + 1)); continue
   fi
   ran=$((ran + 1))

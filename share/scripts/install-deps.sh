@@ -10,6 +10,7 @@ PKGS=(
   libegl1 libegl-mesa0 libgl1-mesa-dri   # offscreen scene snapshots (EGL, no X needed)
   clang libclang-rt-14-dev llvm-14       # fuzz.sh: libFuzzer + sanitizer runtimes, llvm-symbolizer
   opencv-doc                     # its example videos: real video of a hand and of people (tests, real-videos.sh)
+  python3 python3-matplotlib     # share/scripts/plot-run.py: the figures of a run from its CSV files
 )
 missing=()
 for p in "${PKGS[@]}"; do

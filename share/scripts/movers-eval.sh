@@ -26,7 +26,7 @@ name=$(basename "$SCEN" .ini)
 mkdir -p "$OUT"
 
 run() {  # CONFIG INPUT OUT -> prints ATE % of path
-  "$APP" "$1" "$2" --out "$3" --no-gui --quiet --set output.plots=false --set output.scene=false \
+  "$APP" "$1" "$2" --out "$3" --no-gui --quiet --set output.scene=false \
     "${EXTRA[@]}" > "$3.log" 2>&1 || { echo nan; return; }
   grep -o '= [0-9.]* % of path' "$3.log" | head -n 1 | tr -dc '0-9.'
 }

@@ -162,11 +162,11 @@ MEMDIR="$OUT/memory-run"
 rm -rf "$MEMDIR"
 mkdir -p "$MEMDIR"
 printf '%q ' /usr/bin/time -f %M -o "$MEMDIR/maxrss_kb.txt" "$BUILD/bin/imm-monoslam" "ini/$MEM_CONFIG.ini" --out "$MEMDIR" \
-  --no-gui --quiet --set "input.scenario=$OUT/handheld-long.ini" --set output.plots=false --set output.scene=false \
+  --no-gui --quiet --set "input.scenario=$OUT/handheld-long.ini" --set output.scene=false \
   --frames "$LONG_FRAMES" | sed "s|$ROOT/||g" >> "$CMDS"
 echo " &   # + VmRSS/VmHWM of its PID from /proc/PID/status every 0.5 s" >> "$CMDS"
 /usr/bin/time -f %M -o "$MEMDIR/maxrss_kb.txt" "$BUILD/bin/imm-monoslam" "$ROOT/ini/$MEM_CONFIG.ini" \
-  --out "$MEMDIR" --no-gui --quiet --set "input.scenario=$OUT/handheld-long.ini" --set output.plots=false \
+  --out "$MEMDIR" --no-gui --quiet --set "input.scenario=$OUT/handheld-long.ini" \
   --set output.scene=false --frames "$LONG_FRAMES" > "$MEMDIR/stdout.txt" 2> "$MEMDIR/stderr.txt" &
 TPID=$!
 APID=""
@@ -199,7 +199,7 @@ if [[ $PROFILE == 1 ]]; then
     local name="$1"; shift
     note_load "profile $name"
     run perf record -F 999 -g -o "$OUT/perf-$name.data" "$PBUILD/bin/imm-monoslam" "$ROOT/ini/imm7.ini" "$@" \
-      --out "$OUT/prof-$name" --no-gui --quiet --set output.plots=false --set output.scene=false \
+      --out "$OUT/prof-$name" --no-gui --quiet --set output.scene=false \
       --set slam.num_threads=1 > "$OUT/perf-$name.log" 2>&1
     perf report -i "$OUT/perf-$name.data" --no-children --sort symbol --percent-limit 0.7 --stdio 2>/dev/null \
       | grep -E '^ +[0-9.]+%' | cut -c1-170 | head -30 > "$OUT/perf-$name-self.txt" || true
@@ -226,7 +226,7 @@ if [[ "$CALLGRIND" -gt 0 ]]; then
       note_load "callgrind $seq $cfg"
       if [[ $seq == testseq ]]; then IN=("$DATA/monoslam_testseq"); else IN=(--set "input.scenario=$ROOT/ini/scenarios/paper.ini"); fi
       run valgrind --tool=callgrind --callgrind-out-file="$OUT/cg-$seq-$cfg.out" "$BUILD/bin/imm-monoslam" \
-        "$ROOT/ini/$cfg.ini" "${IN[@]}" --out "$OUT/cg-$seq-$cfg" --no-gui --quiet --set output.plots=false \
+        "$ROOT/ini/$cfg.ini" "${IN[@]}" --out "$OUT/cg-$seq-$cfg" --no-gui --quiet \
         --set output.scene=false --set slam.num_threads=1 --frames "$CALLGRIND" > "$OUT/cg-$seq-$cfg.log" 2>&1
       callgrind_annotate --inclusive=yes --threshold=100 "$OUT/cg-$seq-$cfg.out" 2>/dev/null \
         | grep -E '^ *[0-9,]+ \([ 0-9.]+%\)  [^=]' > "$OUT/cg-$seq-$cfg.txt" || true

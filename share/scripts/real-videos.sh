@@ -48,7 +48,7 @@ printf '%-15s %-12s %-9s %-10s %-9s %-9s %-7s %-14s %s\n' sequence config rot_de
 for seq in box-still box-rotating vtest-still vtest-rotating; do
   for cfg in imm7-shadow imm7 single single-shadow; do
     o="$OUT/out-$seq-$cfg"
-    "$BUILD/bin/imm-monoslam" "ini/$cfg.ini" "$OUT/$seq" --out "$o" --no-gui --quiet --set output.plots=false "${EXTRA[@]}" > /dev/null
+    "$BUILD/bin/imm-monoslam" "ini/$cfg.ini" "$OUT/$seq" --out "$o" --no-gui --quiet "${EXTRA[@]}" > /dev/null
     rot=$("$BUILD/bin/slam-eval" ate "$o/trajectory.txt" "$OUT/$seq/groundtruth.txt" --no-align | field 'rotation RMSE')
     # Largest displacement of the camera over the median distance of the map's features from the start.
     m=$(awk '$0 !~ /^#/ && NF == 8 { d = sqrt($2*$2 + $3*$3 + $4*$4); if (d > m) m = d } END { print m + 0 }' "$o/trajectory.txt")
@@ -75,7 +75,7 @@ done
 TS=../shared/data/monoslam_testseq
 if [ -d "$TS" ]; then
   clean="$OUT/out-testseq-clean"
-  "$BUILD/bin/imm-monoslam" ini/imm7-shadow.ini "$TS" --out "$clean" --no-gui --quiet --set output.plots=false "${EXTRA[@]}" > /dev/null
+  "$BUILD/bin/imm-monoslam" ini/imm7-shadow.ini "$TS" --out "$clean" --no-gui --quiet "${EXTRA[@]}" > /dev/null
   printf '\n%-22s %-12s %-12s %-14s %s\n' composite config dev%path 'moving->static' 'static->dynamic'
   for v in "100 554 0.5 0" "300 754 0.45 0" "500 954 0.55 0" "0 354 0.5 100" "600 999 0.5 50"; do
     set -- $v
@@ -84,7 +84,7 @@ if [ -d "$TS" ]; then
       --scale "$3" --span "$1,$2" --video-start "$4" > /dev/null
     for cfg in imm7-shadow imm7 single; do
       o="$OUT/out-$seq-$cfg"
-      "$BUILD/bin/imm-monoslam" "ini/$cfg.ini" "$OUT/$seq" --out "$o" --no-gui --quiet --set output.plots=false "${EXTRA[@]}" > /dev/null
+      "$BUILD/bin/imm-monoslam" "ini/$cfg.ini" "$OUT/$seq" --out "$o" --no-gui --quiet "${EXTRA[@]}" > /dev/null
       dev=$("$BUILD/bin/slam-eval" ate "$o/trajectory.txt" "$clean/trajectory.txt" | field 'ATE / path')
       ms=- sd=-
       if [ -s "$o/classifications.csv" ]; then
@@ -105,7 +105,7 @@ if [ -f "$CUPGZ" ]; then
   for cfg in imm7-shadow imm7 single single-shadow; do
     o="$OUT/out-cup-$cfg"
     "$BUILD/bin/imm-monoslam" "ini/$cfg.ini" "$OUT/cup.mp4" --calib "$OUT/box_calib.txt" --out "$o" --no-gui --quiet \
-      --set output.plots=false "${EXTRA[@]}" > /dev/null
+      "${EXTRA[@]}" > /dev/null
     rot=$(awk '$0 !~ /^#/ && NF == 8 { a = 2 * atan2(sqrt($5*$5 + $6*$6 + $7*$7), $8) * 57.29578; if (a > m) m = a }
                END { printf "%.2f", m }' "$o/trajectory.txt")
     dyn=- st=-

@@ -26,7 +26,7 @@ EVAL=$BUILD/bin/slam-eval
 mkdir -p "$OUT"
 
 run() {  # CONFIG INPUT OUT: a run with both refinements; the log in OUT.log
-  "$APP" "$1" "$2" --out "$3" --no-gui --set output.plots=false --set output.scene=false \
+  "$APP" "$1" "$2" --out "$3" --no-gui --set output.scene=false \
     --set output.refine_trajectory=true --set output.smooth_trajectory=true "${EXTRA[@]}" > "$3.log" 2>&1
 }
 ate() {  # EST REF -> "% of path  % of extent"

@@ -143,8 +143,7 @@ std::map<std::string, std::vector<double>> runApp(const TSequence& seq, const TC
   std::vector<std::string> args{immslam::bench::sourceDir() + "/ini/" + cfg.ini + ".ini"};
   if (!seq.input.empty()) args.push_back(seq.input);
   for (const std::string& a : {std::string("--out"), out, std::string("--no-gui"), std::string("--quiet"),
-                               std::string("--set"), std::string("output.plots=false"), std::string("--set"),
-                               std::string("output.scene=false")})
+                               std::string("--set"), std::string("output.scene=false")})
     args.push_back(a);
   if (!seq.scenario.empty())
   {

@@ -13,7 +13,7 @@ INTERVAL=${INTERVAL:-5}
 rm -rf "$OUT"; mkdir -p "$OUT"
 TIME=(); [ -x /usr/bin/time ] && TIME=(/usr/bin/time -v -o "$OUT/time.txt")
 "${TIME[@]}" "$BUILD/bin/imm-monoslam" "$CONFIG" --set "input.scenario=$HERE/long_run.ini" \
-  --set output.plots=false --no-gui --quiet --out "$OUT/out" > "$OUT/stdout.txt" 2> "$OUT/stderr.txt" &
+  --no-gui --quiet --out "$OUT/out" > "$OUT/stdout.txt" 2> "$OUT/stderr.txt" &
 WRAP=$!
 sleep 1
 PID=$(pgrep -P "$WRAP" imm-monoslam || echo "$WRAP")

@@ -93,7 +93,7 @@ bool waitForLines(const std::string& path, std::size_t n, CChild& child, double 
 /** A synthetic-scenario run long enough to be interrupted (300 frames of handheld.ini). */
 std::vector<std::string> longRunArgs(const std::string& out)
 {
-  return {src("ini/imm7.ini"), "--set", "input.scenario=scenarios/handheld.ini", "--set", "output.plots=false",
+  return {src("ini/imm7.ini"), "--set", "input.scenario=scenarios/handheld.ini",
           "--no-gui", "--quiet", "--out", out};
 }
 }  // namespace

@@ -72,10 +72,10 @@ struct TAppRun
   app::TRunSummary summary;
 };
 
-/** Runs imm-monoslam in-process (quiet, no plots, no GUI), capturing stderr and stdout. */
+/** Runs imm-monoslam in-process (quiet, no GUI), capturing stderr and stdout. */
 inline TAppRun runApp(std::vector<std::string> args)
 {
-  args.insert(args.end(), {"--no-gui", "--set", "output.plots=false"});
+  args.push_back("--no-gui");
   TAppRun r;
   testing::internal::CaptureStderr();
   testing::internal::CaptureStdout();

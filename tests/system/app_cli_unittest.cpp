@@ -1,7 +1,9 @@
 /* The command line of CONTRACT.md: usage errors, config errors naming the key, --help/--version. */
 #include "test_helpers.h"
 
+#include <immslam/app/app_options.h>
 #include <immslam/camera/CCameraModel.h>
+#include <immslam/core/config.h>
 #include <immslam/system/CMonoSlamSystem.h>
 
 #include <mrpt/config/CConfigFile.h>
@@ -58,12 +60,15 @@ TEST(AppConfig, CodeDefaultsAreTheRecommendedConfiguration)
 
 TEST(AppConfig, RemovedKeysNameWhatReplacedThem)
 {
+  // The sections the application reads: the system's, and its own [input] and [output].
+  auto known = system::CMonoSlamSystem::knownKeys();
+  known["input"] = core::knownKeys(app::TInputOptions(), "input");
+  known["output"] = core::knownKeys(app::TOutputOptions(), "output");
   for (const auto& [key, why] : system::CMonoSlamSystem::removedKeys())
   {
     EXPECT_TRUE(why.rfind("removed", 0) == 0 || why.rfind("moved to [", 0) == 0) << key << ": " << why;
     const auto section = key.substr(1, key.find(']') - 1);
     const auto name = key.substr(key.find(']') + 2);
-    const auto known = system::CMonoSlamSystem::knownKeys();
     ASSERT_TRUE(known.count(section)) << key;
     EXPECT_EQ(known.at(section).count(name), 0u) << key << " is still a key";
   }
@@ -143,8 +148,7 @@ TEST(AppCli, FieldOfViewGuessForAnInputWithoutCalibration)
 
   const std::string out = outDir("fov_60");
   app::TRunSummary s;
-  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", folder, "--fov", "60", "--out", out, "--no-gui", "--set",
-                    "output.plots=false"},
+  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", folder, "--fov", "60", "--out", out, "--no-gui"},
                    &s),
             0);
   EXPECT_EQ(s.framesProcessed, 12u);

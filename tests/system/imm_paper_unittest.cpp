@@ -26,7 +26,7 @@ TRun runOn(const std::string& config, const std::vector<std::string>& extra, con
 {
   TRun r;
   const auto out = outDir(name);
-  std::vector<std::string> args{sourceDir() + "/ini/" + config, "--out", out, "--set", "output.plots=false"};
+  std::vector<std::string> args{sourceDir() + "/ini/" + config, "--out", out};
   args.insert(args.end(), extra.begin(), extra.end());
   EXPECT_EQ(runApp(args, &r.summary), 0);
   r.probs = readCsv(out + "/model_probabilities.csv");

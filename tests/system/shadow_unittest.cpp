@@ -33,8 +33,7 @@ TEST(ShadowSystem, MonoslammotSynth19ClassificationAgainstPointGroundTruth)
   if (!haveSharedData("monoslammot_synth19")) GTEST_SKIP() << "../shared/data/monoslammot_synth19 is absent";
   const auto out = outDir("synth19_full");
   app::TRunSummary s;
-  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("monoslammot_synth19"), "--out", out, "--set",
-                    "output.plots=false"},
+  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("monoslammot_synth19"), "--out", out},
                    &s),
             0);
   // Ground truth: per timestamp the projections of the static and moving points; a decision farther
@@ -77,7 +76,7 @@ TEST(ShadowSystem, KnownAssociationReproducesFig5OnSynth19)
       // The paper's protocol: the classic filter uses every measurement given (no gate, no RANSAC),
       // starts on static points only (Sec. II) and takes no unresolved feature (no release), so only
       // the shadow filter's decisions stand between it and the moving points.
-      ASSERT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", data, "--out", out, "--set", "output.plots=false",
+      ASSERT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", data, "--out", out,
                         "--set", "input.known_association=" + points, "--set", "input.known_association_kinds=" + kinds,
                         "--set", "input.known_association_robust=false", "--set",
                         "input.known_association_first_map=static", "--set", "system.starved_below=0"},
@@ -125,8 +124,7 @@ TEST(ShadowSystem, RenderedMovingObjectsDoNotCorruptTheMap)
   app::TRunSummary withShadow, still, noShadow, singleMoving, singleStill;
   const auto run = [](const std::string& cfg, const std::string& scen, const std::string& name, app::TRunSummary* s) {
     const auto out = outDir(name);
-    EXPECT_EQ(runApp({sourceDir() + "/ini/" + cfg, "--out", out, "--set", "input.scenario=scenarios/" + scen, "--set",
-                      "output.plots=false"},
+    EXPECT_EQ(runApp({sourceDir() + "/ini/" + cfg, "--out", out, "--set", "input.scenario=scenarios/" + scen},
                      s),
               0);
     return out;
@@ -188,8 +186,7 @@ TEST(ShadowSystem, MovingObjectsOverFiveSeeds)
                                                {"scenario.seed=" + std::to_string(seed)}))
           .writeDataset(data);
       app::TRunSummary s;
-      ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", data, "--out", outDir("out-" + name), "--set",
-                        "output.plots=false", "--set", "output.refine_trajectory=true"},
+      ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", data, "--out", outDir("out-" + name), "--set", "output.refine_trajectory=true"},
                        &s),
                 0);
       ASSERT_TRUE(s.ate);
@@ -239,7 +236,7 @@ TEST(ShadowSystem, ExclusionMasksDisableTheMovingObjectsAsInFig5a)
   {
     const std::string out = outDir("excl-" + cfg);
     app::TRunSummary s;
-    ASSERT_EQ(runApp({sourceDir() + "/ini/" + cfg, data, "--out", out, "--set", "output.plots=false", "--set",
+    ASSERT_EQ(runApp({sourceDir() + "/ini/" + cfg, data, "--out", out, "--set",
                       "output.search_log=true", "--set", "input.exclusion_masks=" + data},
                      &s),
               0);
@@ -267,7 +264,7 @@ TEST(ShadowSystem, ExclusionMasksDisableTheMovingObjectsAsInFig5a)
   }
   // Without the masks the same data gives decisions on the boxes (the classifier's work).
   const std::string out = outDir("noexcl-imm7-shadow");
-  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", data, "--out", out, "--set", "output.plots=false"}), 0);
+  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", data, "--out", out}), 0);
   const auto res = eval::classificationAgainstMasks(eval::readClassificationsCsv(out + "/classifications.csv"), maskAt, 1);
   EXPECT_GT(res.confusion.trulyDynamic(), 0u);
   std::printf("seed 7 with the moving objects disabled (Fig. 5(a)): IMM %.3f %% of path, full system %.3f %%\n",
@@ -309,7 +306,7 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
   const auto runOn = [](const std::string& cfg, const std::string& folder, eval::TConfusionMatrix* pooled,
                         app::TRunSummary* s) {
     const auto out = outDir(std::filesystem::path(folder).filename().string() + "_" + cfg);
-    EXPECT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", folder, "--out", out, "--set", "output.plots=false"}, s), 0);
+    EXPECT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", folder, "--out", out}, s), 0);
     if (pooled)
     {
       const eval::TConfusionMatrix c =
@@ -328,8 +325,7 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
   // up to 43 %); the reference is the full system's run on the clean sequence.
   const std::string visp = sharedData("visp_rbt") + "/rgb/color_image_0050.png";
   const auto outClean = outDir("composite_ts_clean");
-  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("monoslam_testseq"), "--out", outClean, "--set",
-                    "output.plots=false"}),
+  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("monoslam_testseq"), "--out", outClean}),
             0);
   const core::TTrajectory ref = core::readTumTrajectory(outClean + "/trajectory.txt");
   const std::vector<std::array<double, 3>> tsVariants{{0.45, 30, 60}, {0.44, 30, 60}, {0.46, 30, 60}, {0.45, 28, 60}, {0.45, 30, 56}};
@@ -372,8 +368,7 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
   // visp_rbt (AprilTag ground truth): a desk cut-out crossing the whole image (13 % on average).
   const std::string desk = sharedData("monoslam_testseq") + "/rgb/000500.png";
   app::TRunSummary clean;
-  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("visp_rbt"), "--out", outDir("composite_visp_clean"),
-                    "--set", "output.plots=false"},
+  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("visp_rbt"), "--out", outDir("composite_visp_clean")},
                    &clean),
             0);
   ASSERT_TRUE(clean.ate);
@@ -463,7 +458,7 @@ struct TRealVideoRun
 TRealVideoRun runRealVideo(const std::string& cfg, const std::string& folder, int watch = 0)
 {
   const auto out = outDir(std::filesystem::path(folder).filename().string() + "_" + cfg + (watch ? "_watch" : ""));
-  EXPECT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", folder, "--out", out, "--set", "output.plots=false", "--set",
+  EXPECT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", folder, "--out", out, "--set",
                     "system.watch_features=" + std::to_string(watch)}),
             0);
   TRealVideoRun r;
@@ -504,8 +499,7 @@ TEST(ShadowSystem, RealVideoOfAHandMovingABoxInFrontOfAStillCamera)
     // The video given directly as INPUT is the same stream as the folder imm-rotate wrote at rest
     // (identity remap, lossless PNG, the container's frame rate): the same trajectory, to the byte.
     const auto out = outDir("realvideo_box_direct");
-    ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", video, "--calib", folder + "_calib/calib.txt", "--out", out,
-                      "--set", "output.plots=false"}),
+    ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", video, "--calib", folder + "_calib/calib.txt", "--out", out}),
               0);
     const std::string direct = readFile(out + "/trajectory.txt");
     EXPECT_GT(direct.size(), 1000u);
@@ -567,8 +561,7 @@ TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)
   ASSERT_TRUE(gunzipFile(doc + "/opencv4/html/box.mp4.gz", video));
   const std::string hand = realVideoFolder(video, "realhand_box", 640, 480, 560, 0, 0, 0, 0);
   const auto outClean = outDir("realhand_ts_clean");
-  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("monoslam_testseq"), "--out", outClean, "--set",
-                    "output.plots=false"}),
+  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("monoslam_testseq"), "--out", outClean}),
             0);
   const core::TTrajectory ref = core::readTumTrajectory(outClean + "/trajectory.txt");
   struct TVariant
@@ -590,7 +583,7 @@ TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)
     for (const std::string cfg : {"imm7-shadow", "imm7", "single"})
     {
       const auto out = outDir("realhand_ts" + std::to_string(v) + "_" + cfg);
-      ASSERT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", folder, "--out", out, "--set", "output.plots=false"}), 0);
+      ASSERT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", folder, "--out", out}), 0);
       deviation[cfg].push_back(eval::computeAte(core::readTumTrajectory(out + "/trajectory.txt"), ref).rmseOverPath);
       if (cfg == "imm7-shadow")
       {

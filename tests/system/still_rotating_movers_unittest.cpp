@@ -32,7 +32,7 @@ TMoversRun runMovers(const std::string& scenario, const std::string& name)
 {
   const auto out = outDir(name);
   EXPECT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", "--out", out, "--frames", "240", "--set",
-                    "input.scenario=scenarios/" + scenario, "--set", "output.plots=false", "--set",
+                    "input.scenario=scenarios/" + scenario, "--set",
                     "system.watch_features=10"}),
             0);
   TMoversRun r;

@@ -25,7 +25,7 @@ TEST(SystemSynthetic, HandheldSingleModelAteWithinOnePercentOfPath)
   // 0.77 % of path on seed 7 (this test), 0.79 % on 11, 0.57 % on 23. Limit 1.2x seed 7's.
   app::TRunSummary s;
   ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", "--out", outDir("handheld_single"), "--set",
-                    "input.scenario=scenarios/handheld.ini", "--set", "output.plots=false"},
+                    "input.scenario=scenarios/handheld.ini"},
                    &s),
             0);
   ASSERT_TRUE(s.ate.has_value());
@@ -45,7 +45,7 @@ TEST(SystemSynthetic, FisheyeLensDefaultConfigAteWithinOnePercentOfPath)
   app::TRunSummary s;
   const std::string out = outDir("handheld_fisheye");
   ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", "--out", out, "--set",
-                    "input.scenario=scenarios/handheld-fisheye.ini", "--set", "output.plots=false", "--set",
+                    "input.scenario=scenarios/handheld-fisheye.ini", "--set",
                     "output.search_log=true"},
                    &s),
             0);
@@ -76,8 +76,7 @@ TEST(SystemRealData, VispRbtAteWithinThreePercentOfPath)
 {
   if (!haveSharedData("visp_rbt")) GTEST_SKIP() << "../shared/data/visp_rbt is absent";
   app::TRunSummary s;
-  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", sharedData("visp_rbt"), "--out", outDir("visp_single"), "--set",
-                    "output.plots=false"},
+  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", sharedData("visp_rbt"), "--out", outDir("visp_single")},
                    &s),
             0);
   ASSERT_TRUE(s.ate.has_value());
@@ -96,8 +95,7 @@ TEST(SystemRealData, MonoslamTestseqTrackedEndToEndWithoutKnownTarget)
   if (!haveSharedData("monoslam_testseq")) GTEST_SKIP() << "../shared/data/monoslam_testseq is absent";
   app::TRunSummary s;
   const auto out = outDir("testseq_single");
-  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", sharedData("monoslam_testseq"), "--out", out, "--set",
-                    "output.plots=false", "--set", "output.search_log=true"},
+  ASSERT_EQ(runApp({sourceDir() + "/ini/single.ini", sharedData("monoslam_testseq"), "--out", out, "--set", "output.search_log=true"},
                    &s),
             0);
   EXPECT_EQ(s.framesProcessed, 1000u);
@@ -146,7 +144,7 @@ struct TRefinedRun
 TRefinedRun runAndRefine(const std::string& config, const std::string& data, const std::string& name)
 {
   const auto out = outDir(name);
-  EXPECT_EQ(runApp({sourceDir() + "/ini/" + config, sharedData(data), "--out", out, "--set", "output.plots=false",
+  EXPECT_EQ(runApp({sourceDir() + "/ini/" + config, sharedData(data), "--out", out,
                     "--set", "output.search_log=true"}),
             0);
   TRefinedRun r;
@@ -167,7 +165,7 @@ TEST(SystemRealData, VispRbtGroundTruthDisagreesWithTheImagesAndTheEstimateAgree
   // estimate vs BA 0.67 %, 2.2 deg. (synth19's exact ground truth, below, shows none of this.)
   if (!haveSharedData("visp_rbt")) GTEST_SKIP() << "../shared/data/visp_rbt is absent";
   const auto out = outDir("visp_reprojection");
-  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7.ini", sharedData("visp_rbt"), "--out", out, "--set", "output.plots=false",
+  ASSERT_EQ(runApp({sourceDir() + "/ini/imm7.ini", sharedData("visp_rbt"), "--out", out,
                     "--set", "output.search_log=true"}),
             0);
   const auto gt = core::readTumTrajectory(sharedData("visp_rbt") + "/groundtruth.txt");
@@ -204,8 +202,7 @@ TEST(SystemRealData, ExactGroundTruthAndLongRealRunAgreeWithTheirMeasurements)
     GTEST_SKIP() << "../shared/data/monoslammot_synth19 or monoslam_testseq is absent";
   {
     const auto out = outDir("synth19_reprojection");
-    ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("monoslammot_synth19"), "--out", out, "--set",
-                      "output.plots=false", "--set", "output.search_log=true"}),
+    ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", sharedData("monoslammot_synth19"), "--out", out, "--set", "output.search_log=true"}),
               0);
     const auto cam = camera::loadCalibFile(sharedData("monoslammot_synth19") + "/calib.txt");
     const auto st = refine::reprojectionStats(
@@ -246,7 +243,7 @@ TEST(SystemOutputs, RefinedTrajectoryOnlyWhenAsked)
   // [output] refine_trajectory: trajectory_refined.txt (the poses that measure >= 6 features, in the
   // filter's frame), closer to the truth than the filter's; not written unless asked.
   const std::vector<std::string> base{sourceDir() + "/ini/imm7-shadow.ini", "--frames", "120", "--set",
-                                      "input.scenario=scenarios/handheld.ini", "--set", "output.plots=false"};
+                                      "input.scenario=scenarios/handheld.ini"};
   auto args = base;
   const auto plain = outDir("refine_off");
   args.insert(args.end(), {"--out", plain});
@@ -278,7 +275,7 @@ TEST(SystemOutputs, SmoothedTrajectoryOnlyWhenAskedAndTheFilterUnchanged)
   // keyframe smoother's thread; its ATE, lag and CPU time in the summary; the filter's own outputs
   // byte-identical to a run without it; not written unless asked.
   const std::vector<std::string> base{sourceDir() + "/ini/imm7-shadow.ini", "--frames", "120", "--set",
-                                      "input.scenario=scenarios/handheld.ini", "--set", "output.plots=false"};
+                                      "input.scenario=scenarios/handheld.ini"};
   auto args = base;
   const auto plain = outDir("smooth_off");
   args.insert(args.end(), {"--out", plain});
@@ -415,7 +412,7 @@ TEST(SystemRealData, MonoslamTestseqBlackoutIsRelocalisedOnTheSameMap)
   ASSERT_EQ(k, 1000);
   const auto run = [&](const std::string& input, const std::string& name) {
     const auto dir = outDir(name);
-    EXPECT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", input, "--out", dir, "--set", "output.plots=false"}), 0);
+    EXPECT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", input, "--out", dir}), 0);
     return dir;
   };
   const auto ref = run(data, "testseq_blackout_ref");

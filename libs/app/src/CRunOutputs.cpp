@@ -7,13 +7,18 @@
 #include <immslam/camera/mrpt_camera.h>
 #include <immslam/refine/bundle_adjust.h>
 #include <immslam/eval/statistics.h>
+#include <immslam/io/CCsvWriter.h>
+#include <immslam/sim/CSyntheticSource.h>
 
 #include <unistd.h>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <iomanip>
+#include <map>
 #include <sstream>
 
 namespace immslam::app::detail
@@ -111,6 +116,58 @@ void CStatisticsSink::onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary
   }
 }
 
+namespace
+{
+/** True motion labels of a rendered dataset folder (motion_labels.txt: "timestamp label"), if any. */
+std::map<long long, std::string> readMotionLabels(const std::string& folder)
+{
+  std::map<long long, std::string> out;
+  std::ifstream f(std::filesystem::path(folder) / "motion_labels.txt");
+  std::string line;
+  while (std::getline(f, line))
+  {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream is(line);
+    double t;
+    std::string label;
+    if (is >> t >> label) out[std::llround(t * 1e6)] = label;
+  }
+  return out;
+}
+}  // namespace
+
+CTruthSeriesSink::CTruthSeriesSink(const TRunContext& ctx, const TRunInputs& in)
+    : m_ctx(ctx),
+      m_in(in),
+      m_synthetic(dynamic_cast<const sim::CSyntheticSource*>(in.source.get())),
+      m_folderLabels(in.inputPath.empty() ? std::map<long long, std::string>() : readMotionLabels(in.inputPath))
+{
+}
+
+void CTruthSeriesSink::onFrame(const TFrameResult& r)
+{
+  const double t = r.slam.lastReport().timestamp;
+  if (m_synthetic)
+    m_labels.emplace_back(t, sim::toString(m_synthetic->label(r.frame.index)));
+  else if (const auto it = m_folderLabels.find(std::llround(r.frame.timestamp * 1e6)); it != m_folderLabels.end())
+    m_labels.emplace_back(t, it->second);
+}
+
+void CTruthSeriesSink::onEnd(const slam::CMonoSlamIMM&, TRunSummary& summary)
+{
+  const std::filesystem::path dir(m_ctx.args.outDir);
+  if (!m_labels.empty())
+  {
+    io::CCsvWriter f((dir / "motion_labels.csv").string(), {"timestamp", "label"});
+    for (const auto& [t, label] : m_labels) f.addRow(t, label);
+  }
+  if (summary.ate)
+  {
+    io::CCsvWriter f((dir / "ate.csv").string(), {"timestamp", "position_error"});
+    for (const auto& pe : summary.ate->errors) f.addRow(pe.tEst, pe.position);
+  }
+}
+
 CRefineSink::CRefineSink(const TRunContext& ctx, const TRunInputs& in, const COutputFiles& files)
     : m_ctx(ctx), m_in(in), m_files(files)
 {
@@ -190,12 +247,12 @@ CRunOutputs::CRunOutputs(const TRunContext& ctx, const TRunInputs& in, const sys
   if (calibrationGuessed) camera::saveCalibFile(*in.cam, m_files->path("calib_guessed.txt"));
   const core::TTrajectory& trajectory = m_files->trajectory();
   m_sinks.push_back(std::make_unique<CStatisticsSink>(ctx, in, trajectory));
+  m_sinks.push_back(std::make_unique<CTruthSeriesSink>(ctx, in));  // after the statistics: reads the ATE
   if (in.out.refine_trajectory) m_sinks.push_back(std::make_unique<CRefineSink>(ctx, in, *m_files));
   if (in.out.smooth_trajectory) m_sinks.push_back(std::make_unique<CSmoothingSink>(in, *m_files, ctx.log));
   if (in.out.overlays || in.out.overlay_video) m_sinks.push_back(std::make_unique<COverlaySink>(ctx.args.outDir, in.out));
   if (CLiveView::available(ctx.args.noGui)) m_sinks.push_back(std::make_unique<CLiveViewSink>(in.out, trajectory));
   if (in.out.scene || in.out.scene_every_n > 0) m_sinks.push_back(std::make_unique<CSceneSink>(ctx, in, trajectory));
-  if (in.out.plots) m_sinks.push_back(std::make_unique<CPlotSink>(ctx, in, sys.slam()));
 }
 
 CRunOutputs::~CRunOutputs() = default;

@@ -16,7 +16,7 @@ namespace immslam::app::detail
 {
 /** The output folder of a run and its writers: the progress line (on a terminal), the per-frame
  * files, the statistics of the summary, [output] refine_trajectory, overlays, live windows (with a
- * display, without --no-gui), scenes, plots. */
+ * display, without --no-gui), scenes, and the truth series the figures need (motion_labels.csv, ate.csv). */
 class CRunOutputs
 {
  public:
@@ -31,7 +31,7 @@ class CRunOutputs
   const COutputFiles& files() const;
 
   /** The writers, in the order they are told: the files come before every writer that reads their
-   * trajectory, the statistics (ATE) before the scene and the plots. */
+   * trajectory, the statistics (ATE) before the truth series and the scene. */
   std::vector<IFrameSink*> sinks();
 
  private:

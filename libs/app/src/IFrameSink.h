@@ -1,6 +1,6 @@
 /* imm-monoslam — private to libs/app: what the frame loop publishes (one TFrameResult a processed
  * frame, the run's end) and the one interface of everything that consumes it (IFrameSink): output
- * files, overlays, scenes, plots, the live view, the progress line. */
+ * files, overlays, scenes, the truth series, the live view, the progress line. */
 #pragma once
 
 #include <immslam/app/CImmMonoSlamApp.h>

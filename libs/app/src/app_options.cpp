@@ -50,7 +50,6 @@ void TOutputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, 
   IMMSLAM_LOAD_BOOL(overlays);
   IMMSLAM_LOAD_INT(overlay_every_n);
   IMMSLAM_LOAD_BOOL(overlay_video);
-  IMMSLAM_LOAD_BOOL(plots);
   IMMSLAM_LOAD_BOOL(search_log);
   IMMSLAM_LOAD_BOOL(refine_trajectory);
   IMMSLAM_LOAD_BOOL(smooth_trajectory);
@@ -67,7 +66,6 @@ void TOutputOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const st
   MRPT_SAVE_CONFIG_VAR_COMMENT(overlays, "write overlay images into overlays/");
   MRPT_SAVE_CONFIG_VAR_COMMENT(overlay_every_n, "overlay every N frames");
   MRPT_SAVE_CONFIG_VAR_COMMENT(overlay_video, "also overlays.avi (MJPG)");
-  MRPT_SAVE_CONFIG_VAR_COMMENT(plots, "PNG plots at the end");
   MRPT_SAVE_CONFIG_VAR_COMMENT(gui_scene_every_n, "live 3-D window refresh period (frames; windows need a display, no --no-gui)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(search_log, "write searches.csv (every active search of every frame)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(refine_trajectory,

@@ -1,6 +1,6 @@
 /* imm-monoslam — private to libs/app: the writers of a run, one IFrameSink each (CRunOutputs picks
  * and orders them): the per-frame files, the run's statistics, the final bundle adjustment, the
- * overlays, the live windows, the scenes, the plots, the progress line. */
+ * overlays, the live windows, the scenes, the truth series (for the figures), the progress line. */
 #pragma once
 
 #include <immslam/app/CLiveView.h>
@@ -163,28 +163,22 @@ class CSceneSink : public IFrameSink
   TTrackHistory m_tracks;
 };
 
-/** [output] plots: model_probabilities.png (the IMM paper's Fig. 4, with the true motion labels
- * when the input knows them), model_probabilities_log.png, search_area.png, ate.png. */
-class CPlotSink : public IFrameSink
+/** The series the figures of a run need beyond the per-frame files (share/scripts/plot-run.py draws
+ * them): motion_labels.csv (`timestamp,label`, the true motion of each frame) when the input knows it
+ * (rendered scenarios; dataset folders with motion_labels.txt), ate.csv (`timestamp,position_error`,
+ * after Sim(3) alignment) when it has ground truth. Timestamps are those of model_probabilities.csv. */
+class CTruthSeriesSink : public IFrameSink
 {
  public:
-  CPlotSink(const TRunContext& ctx, const TRunInputs& in, const slam::CMonoSlamIMM& slam);
+  CTruthSeriesSink(const TRunContext& ctx, const TRunInputs& in);
   void onFrame(const TFrameResult& r) override;
   void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
 
  private:
-  /** The true motion label of a frame, when the input knows it. */
-  void addLabel(const io::TFrame& frame);
-  /** model_probabilities.png, model_probabilities_log.png and search_area.png. */
-  void plotSeries() const;
-
   const TRunContext& m_ctx;
   const TRunInputs& m_in;
   const sim::CSyntheticSource* m_synthetic;          ///< the source, when it is the renderer
   std::map<long long, std::string> m_folderLabels;   ///< motion_labels.txt of a dataset folder
-  std::vector<std::string> m_labels;                 ///< true label per processed frame
-  std::vector<std::string> m_modelNames;
-  std::vector<double> m_times, m_areas;
-  std::vector<double> m_probs;  ///< model probabilities, one row of r per frame (row-major)
+  std::vector<std::pair<double, std::string>> m_labels;  ///< (timestamp, true label) of labelled frames
 };
 }  // namespace immslam::app::detail

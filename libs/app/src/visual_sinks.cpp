@@ -1,19 +1,15 @@
-/* imm-monoslam — the visual writers of a run: overlays, live windows, scenes, plots (see
+/* imm-monoslam — the visual writers of a run: overlays, live windows, scenes (see
  * output_sinks.h). */
 #include "output_sinks.h"
 
 #include <immslam/math/chi2.h>
-#include <immslam/sim/CSyntheticSource.h>
 #include <immslam/viz/overlay.h>
-#include <immslam/viz/plots.h>
 #include <immslam/viz/scene_render.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 namespace immslam::app::detail
 {
@@ -66,23 +62,6 @@ cv::Mat drawFrameOverlay(const TFrameResult& res)
   }
   const io::TFrame& f = res.frame;
   return viz::drawOverlay(f.colour.empty() ? f.grey : f.colour, oc);
-}
-
-/** True motion labels of a rendered dataset folder (motion_labels.txt: "timestamp label"), if any. */
-std::map<long long, std::string> readMotionLabels(const std::string& folder)
-{
-  std::map<long long, std::string> out;
-  std::ifstream f(fs::path(folder) / "motion_labels.txt");
-  std::string line;
-  while (std::getline(f, line))
-  {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream is(line);
-    double t;
-    std::string label;
-    if (is >> t >> label) out[std::llround(t * 1e6)] = label;
-  }
-  return out;
 }
 
 viz::COverlayWriter::TOptions overlayOptions(const std::string& outDir, const TOutputOptions& opts)
@@ -198,83 +177,4 @@ void CSceneSink::onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary)
     m_ctx.log.logStr(mrpt::system::LVL_WARN, "scene.png not rendered: " + why);
 }
 
-CPlotSink::CPlotSink(const TRunContext& ctx, const TRunInputs& in, const slam::CMonoSlamIMM& slam)
-    : m_ctx(ctx),
-      m_in(in),
-      m_synthetic(dynamic_cast<const sim::CSyntheticSource*>(in.source.get())),
-      m_folderLabels(in.inputPath.empty() ? std::map<long long, std::string>() : readMotionLabels(in.inputPath))
-{
-  for (const auto& m : slam.models()) m_modelNames.push_back(m.name);
-}
-
-void CPlotSink::onFrame(const TFrameResult& res)
-{
-  const auto& r = res.slam.lastReport();
-  m_times.push_back(r.timestamp);
-  m_areas.push_back(r.meanSearchAreaPx2);
-  const VecX mu = res.slam.modelProbabilities();
-  m_probs.insert(m_probs.end(), mu.data(), mu.data() + mu.size());
-  addLabel(res.frame);
-}
-
-void CPlotSink::addLabel(const io::TFrame& frame)
-{
-  if (m_synthetic)
-    m_labels.push_back(sim::toString(m_synthetic->label(frame.index)));
-  else if (const auto it = m_folderLabels.find(std::llround(frame.timestamp * 1e6)); it != m_folderLabels.end())
-    m_labels.push_back(it->second);
-}
-
-void CPlotSink::plotSeries() const
-{
-  const fs::path dir(m_ctx.args.outDir);
-  const auto r = static_cast<Eigen::Index>(m_modelNames.size());
-  const MatX P = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-      m_probs.data(), static_cast<Eigen::Index>(m_times.size()), r);
-  viz::TModelProbabilityPlotOptions po;
-  if (m_labels.size() == m_times.size()) po.truthLabels = m_labels;
-  viz::plotModelProbabilities(m_times, m_modelNames, P, (dir / "model_probabilities.png").string(), po);
-  po.style = viz::EProbabilityStyle::Lines;
-  po.logY = true;
-  viz::plotModelProbabilities(m_times, m_modelNames, P, (dir / "model_probabilities_log.png").string(), po);
-  viz::TSeriesPlotOptions so;
-  so.title = "Mean search-ellipse area (95 %)";
-  so.yLabel = "area [px^2]";
-  so.logY = true;
-  viz::TPlotSeries area{
-      m_modelNames.size() > 1 ? "IMM (" + std::to_string(m_modelNames.size()) + " models)" : m_modelNames[0], {}, {}};
-  for (std::size_t k = 0; k < m_times.size(); ++k)
-    if (m_areas[k] > 0)
-    {
-      area.x.push_back(m_times[k]);
-      area.y.push_back(m_areas[k]);
-    }
-  if (!area.x.empty()) viz::plotSeries({area}, (dir / "search_area.png").string(), so);
-}
-
-void CPlotSink::onEnd(const slam::CMonoSlamIMM&, TRunSummary& summary)
-{
-  if (m_times.empty()) return;
-  try
-  {
-    plotSeries();
-    if (m_in.source->groundTruth() && summary.ate)
-    {
-      viz::TSeriesPlotOptions ao;
-      ao.title = "Absolute trajectory error after Sim(3) alignment";
-      ao.yLabel = "position error [ground-truth units]";
-      viz::TPlotSeries e{"ATE", {}, {}};
-      for (const auto& pe : summary.ate->errors)
-      {
-        e.x.push_back(pe.tEst);
-        e.y.push_back(pe.position);
-      }
-      viz::plotSeries({e}, (fs::path(m_ctx.args.outDir) / "ate.png").string(), ao);
-    }
-  }
-  catch (const std::exception& ex)
-  {
-    m_ctx.log.logStr(mrpt::system::LVL_WARN, std::string("plots not written: ") + ex.what());
-  }
-}
 }  // namespace immslam::app::detail

@@ -1,6 +1,7 @@
 /* Tests: quaternion Jacobians vs numerical, chi-square quantiles, log-likelihoods. */
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <gtest/gtest.h>
 #include <immslam/math/bearing.h>
@@ -11,7 +12,12 @@
 #include <immslam/math/quaternion.h>
 #include <immslam/math/random_samples.h>
 
+#include <mutex>
 #include <random>
+#include <set>
+#include <stdexcept>
+#include <thread>
+#include <vector>
 
 using namespace immslam;
 using namespace immslam::math;
@@ -180,10 +186,9 @@ TEST(ThreadPool, BackToBackJobsOfEverySizeAndUnevenCosts)
 
 TEST(ThreadPool, ManyGrowingJobsWithMoreThreadsThanCoresNeitherHangNorRunAnIndexTwice)
 {
-  // Regression: a worker still looping over a job could read the next job's (larger) count beside
-  // the old ticket, claim one index too many and count it done; the index then ran twice and the
-  // caller waited for ever (seen in the app after ~10^5 jobs; here within ~2 * 10^5 with 4 threads
-  // on 2 cores). Jobs of 1, 2, 3 indices in turn, so most jobs are larger than the one before.
+  // Jobs of 1, 2, 3 indices in turn, back to back, more threads asked for than this machine's 2
+  // cores: the pattern that once hung a hand-written pool (a worker late in one job claimed an index
+  // of the next). Every index runs exactly once and the test ends (ctest timeout 120 s).
   for (unsigned n : {3u, 4u})
   {
     CThreadPool pool(n);
@@ -200,9 +205,8 @@ TEST(ThreadPool, ManyGrowingJobsWithMoreThreadsThanCoresNeitherHangNorRunAnIndex
   }
 }
 
-TEST(ThreadPool, JobsLargerThanOneTicketRunInParts)
+TEST(ThreadPool, LargeRangesCoverEveryIndexOnce)
 {
-  // The ticket holds up to 65535 indices; larger ranges run as consecutive jobs, every index once.
   CThreadPool pool(3);
   std::vector<unsigned char> hits(200000, 0);
   pool.parallelFor(-100000, 100000, [&](int i) { hits[static_cast<std::size_t>(i + 100000)]++; });
@@ -220,10 +224,55 @@ TEST(ThreadPool, CoversEveryIndexOnceAndPropagatesErrors)
       pool.parallelFor(0, 37, [&](int i) { hits[i]++; });
       for (int h : hits) EXPECT_EQ(h, 1);
     }
-    EXPECT_THROW(pool.parallelFor(0, 10, [](int i) { if (i == 7) throw std::runtime_error("x"); }),
-                 std::runtime_error);
-    int count = 0;
-    pool.parallelFor(0, 1, [&](int) { ++count; });
-    EXPECT_EQ(count, 1);
+    // The exception itself reaches the caller, the other indices still run, and the pool keeps
+    // working after it.
+    std::vector<int> ran(10, 0);
+    try
+    {
+      pool.parallelFor(0, 10, [&](int i) {
+        if (i == 7) throw std::runtime_error("index 7 failed");
+        ran[i]++;
+      });
+      ADD_FAILURE() << "no exception with " << n << " threads";
+    }
+    catch (const std::runtime_error& e)
+    {
+      EXPECT_STREQ(e.what(), "index 7 failed");
+    }
+    EXPECT_EQ(std::count(ran.begin(), ran.end(), 1), 9) << n << " threads";
+    std::vector<int> after(5, 0);
+    pool.parallelFor(0, 5, [&](int i) { after[i]++; });
+    EXPECT_EQ(after, std::vector<int>(5, 1)) << n << " threads";
+  }
+}
+
+TEST(ThreadPool, HonoursTheNumberOfThreads)
+{
+  // size() is what was asked (0: the hardware's); no more than that many indices ever run at once;
+  // with one thread every index runs on the caller.
+  EXPECT_EQ(CThreadPool(3).size(), 3u);
+  EXPECT_EQ(CThreadPool(0).size(), std::max(1u, std::thread::hardware_concurrency()));
+  for (unsigned n : {1u, 2u, 3u})
+  {
+    CThreadPool pool(n);
+    std::atomic<int> running{0}, most{0};
+    std::mutex m;
+    std::set<std::thread::id> ids;
+    pool.parallelFor(0, 64, [&](int) {
+      const int now = running.fetch_add(1) + 1;
+      for (int seen = most.load(); now > seen && !most.compare_exchange_weak(seen, now);) {}
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+      {
+        std::lock_guard<std::mutex> lk(m);
+        ids.insert(std::this_thread::get_id());
+      }
+      running.fetch_sub(1);
+    });
+    EXPECT_LE(most.load(), static_cast<int>(n));
+    EXPECT_LE(ids.size(), n);
+    if (n == 1)
+    {
+      EXPECT_EQ(ids, std::set<std::thread::id>{std::this_thread::get_id()});
+    }
   }
 }

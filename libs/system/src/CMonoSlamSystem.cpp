@@ -152,6 +152,9 @@ const std::map<std::string, std::string>& CMonoSlamSystem::removedKeys()
         {"dynamic_max_missed_frames", "10"}};
     for (const auto& [k, v] : shadowInternals)
       internal(std::string("[shadow] ") + k, std::string(v) + "; doc/shadow.md");
+    m["[output] plots"] =
+        "removed: the run writes no pictures of its series; share/scripts/plot-run.py RUN_DIR draws them from "
+        "the run's CSV files";
     return m;
   }();
   return removed;

@@ -55,35 +55,4 @@ cv::Rect drawTextBox(cv::Mat& img, const std::vector<std::string>& lines, cv::Po
         textColour, 1);
   return box;
 }
-
-std::string formatNumber(double v, int significant)
-{
-  if (!std::isfinite(v)) return std::isnan(v) ? "nan" : (v > 0 ? "inf" : "-inf");
-  if (v == 0) return "0";
-  char buf[64];
-  const double a = std::abs(v);
-  if (a >= 1e5 || a < 1e-3)
-    std::snprintf(buf, sizeof buf, "%.*e", std::max(0, significant - 1), v);
-  else
-    std::snprintf(buf, sizeof buf, "%.*f",
-        std::max(0, significant - 1 - int(std::floor(std::log10(a)))), v);
-  std::string s(buf);
-  // Trim trailing zeros of the mantissa.
-  const auto e = s.find('e');
-  std::string mant = s.substr(0, e), exp = e == std::string::npos ? "" : s.substr(e);
-  if (mant.find('.') != std::string::npos)
-  {
-    while (!mant.empty() && mant.back() == '0') mant.pop_back();
-    if (!mant.empty() && mant.back() == '.') mant.pop_back();
-  }
-  if (!exp.empty())
-  {
-    // e+05 -> e5, e-04 -> e-4
-    const char sign = exp[1];
-    std::string digits = exp.substr(2);
-    while (digits.size() > 1 && digits[0] == '0') digits.erase(0, 1);
-    exp = std::string("e") + (sign == '-' ? "-" : "") + digits;
-  }
-  return mant + exp;
-}
 }  // namespace immslam::viz

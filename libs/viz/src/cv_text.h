@@ -1,4 +1,4 @@
-/* imm-monoslam — internal OpenCV text helpers shared by overlays, plots and snapshots. */
+/* imm-monoslam — internal OpenCV text helpers shared by overlays and snapshots. */
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -25,7 +25,4 @@ cv::Rect drawTextBox(cv::Mat& img, const std::vector<std::string>& lines, cv::Po
 
 /** Fills a rectangle blending with what is below (alpha = opacity of the colour). */
 void blendRect(cv::Mat& img, cv::Rect r, const cv::Scalar& colour, double alpha);
-
-/** Formats a number compactly and locale-independently ("%.*g"-like with trailing zeros cut). */
-std::string formatNumber(double v, int significant = 4);
 }  // namespace immslam::viz

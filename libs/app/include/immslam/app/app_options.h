@@ -62,7 +62,6 @@ struct TOutputOptions : public mrpt::config::CLoadableOptions
   bool overlays = false;    ///< write overlay images (search ellipses, matches, classes)
   int overlay_every_n = 1;  ///< every N frames
   bool overlay_video = false;  ///< also overlays.avi
-  bool plots = true;        ///< PNG plots at the end (model probabilities, search areas, ATE)
   int gui_scene_every_n = 10;  ///< live 3-D window refresh period (frames), when windows are open
   bool search_log = false;  ///< searches.csv (and shadow_log.csv): every search / shadow feature of every frame
   bool refine_trajectory = false;  ///< trajectory_refined.txt: a bundle adjustment of the run's own matches at the end

@@ -1,4 +1,4 @@
-/* imm-monoslam — colours shared by the 3-D scenes, the overlays and the plots. */
+/* imm-monoslam — colours shared by the 3-D scenes, and the overlays. */
 #pragma once
 
 #include <cstdint>
