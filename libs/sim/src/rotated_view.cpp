@@ -198,10 +198,12 @@ double writeMovingMask(const cv::Mat& frame, cv::BackgroundSubtractorMOG2& mog, 
   return cv::countNonZero(mask) / (mapU.cols * static_cast<double>(mapU.rows));
 }
 
-/** The output folder of a still source: masks/ and background.png. */
-void prepareStillOutputs(const std::string& outFolder, const cv::Mat& background)
+/** The output folder of a still source: masks/ and background.png (the learned model's background). */
+void prepareStillOutputs(const std::string& outFolder, const cv::BackgroundSubtractorMOG2& mog)
 {
   fs::create_directories(fs::path(outFolder) / "masks");
+  cv::Mat background;
+  mog.getBackgroundImage(background);
   const std::string bgFile = (fs::path(outFolder) / "background.png").string();
   if (!cv::imwrite(bgFile, background)) throw std::runtime_error("cannot write " + bgFile);
 }
@@ -240,11 +242,10 @@ TRotatedViewStats rotateStillVideo(const std::string& source, const std::string&
   const camera::CPinholeCamera virt(W, H, f, f, 0.5 * (W - 1), 0.5 * (H - 1));
 
   cv::Ptr<cv::BackgroundSubtractorMOG2> mog;
-  cv::Mat background;
-  if (o.still) mog = learnBackground(source, o), mog->getBackgroundImage(background);
+  if (o.still) mog = learnBackground(source, o);
 
   fs::create_directories(outFolder);
-  if (o.still) prepareStillOutputs(outFolder, background);
+  if (o.still) prepareStillOutputs(outFolder, *mog);
   std::ostringstream comment;
   comment << "imm-rotate: " << source << " seen by a camera rotating about its optical centre (pan " << o.panDeg
           << ", tilt " << o.tiltDeg << ", roll " << o.rollDeg << " deg, period " << o.periodFrames << " frames)";
