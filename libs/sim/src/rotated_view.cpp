@@ -83,8 +83,8 @@ cv::Ptr<cv::BackgroundSubtractorMOG2> learnBackground(const std::string& source,
 {
   constexpr double kBackgroundRatio = 0.5;
   // Lower bound of a mode's variance, grey levels squared: 25 (sigma >= 5) instead of OpenCV's 4. The
-  // videos are compressed (H.264, MPEG-4) and the camera's exposure breathes; on box.mp4's bright white
-  // table the default marks patches of the table as moving whenever the box comes near.
+  // videos are compressed and the camera's exposure breathes; on box.mp4's bright white table the
+  // default marks patches of the table as moving whenever the box comes near.
   constexpr double kMinVariance = 25;
   const io::CImageSource::Ptr rd = openSource(source, o.fps);
   cv::Ptr<cv::BackgroundSubtractorMOG2> mog = cv::createBackgroundSubtractorMOG2(1000, o.varThreshold, true);
