@@ -516,9 +516,9 @@ TEST(ShadowSystem, RealVideoOfAHandMovingABoxInFrontOfAStillCamera)
   EXPECT_GE(full.decisions.trulyDynamic(), 0u);
   EXPECT_LE(full.decisions.movingAsStaticRate(), 1.0);
   // With watched features ([system] watch_features = 10, a camera at rest watching what moves):
-  // rotation RMSE 1.83 deg, 226 dynamic and 60 static decisions, moving->static 31 of 218. The masks
-  // mark what differs from the background, also the box while the hand holds it still, when a static
-  // decision is what the test should give.
+  // rotation RMSE 1.83 deg, 226 dynamic and 60 static decisions, moving->static 27 of 245 against
+  // imm-rotate's MOG2 masks, which also mark the box while the hand holds it still (for less than half
+  // of the video), when a static decision is what the test should give.
   EXPECT_LT(watching.rotationRmseDeg, 2.2);
   EXPECT_GE(watching.decisions.trulyDynamic(), 176u);
   EXPECT_LE(watching.decisions.movingAsStaticRate(), 0.17);
@@ -541,7 +541,7 @@ TEST(ShadowSystem, RealVideoOfPeopleWalkingSeenByARotatingCamera)
   EXPECT_LT(full.rotationRmseDeg, single.rotationRmseDeg);
   EXPECT_GT(full.segmentation, 0.99);
   // With watched features ([system] watch_features = 10) the people are seen while the map is
-  // complete (none without them): 300 frames, 35 of 38 decisions on people dynamic, 2 of 138 on the courtyard dynamic.
+  // complete (none without them): 300 frames, 35 of 36 decisions on people dynamic, 2 of 140 on the courtyard dynamic.
   EXPECT_LE(full.decisions.dynamicAsStatic, 0u) << "nothing moving enters the map";
   EXPECT_GE(watching.decisions.trulyDynamic(), 31u);
   EXPECT_LE(watching.decisions.movingAsStaticRate(), 0.095);
@@ -601,13 +601,14 @@ TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)
               "%.3f %%; moving->static %zu/%zu, static->dynamic %zu/%zu\n",
               100 * mean(deviation["imm7-shadow"]), 100 * mean(deviation["imm7"]), 100 * mean(deviation["single"]),
               pooled.dynamicAsStatic, pooled.trulyDynamic(), pooled.staticAsDynamic, pooled.trulyStatic());
-  // Measured 2026-11-27: full system 0.139 / 0.097 / 0.139 % (mean 0.125 %; IMM without shadow filter
-  // 1.182 / 0.568 / 2.192 %, single model 0.835 / 0.406 / 0.527 %); none of 81 decisions on the hand and
-  // the box static; static->dynamic 43 of 332. Limits ~1.2x.
+  // Measured (the hand and the box cut out by imm-rotate's MOG2 masks): full system 0.102 / 0.090 /
+  // 0.101 % (mean 0.098 %; IMM without shadow filter 0.914 / 0.578 / 1.301 %, single model 0.968 /
+  // 0.699 / 0.231 %); none of 66 decisions on the hand and the box static; static->dynamic 26 of 290.
+  // Limits ~1.2x.
   EXPECT_LE(mean(deviation["imm7-shadow"]), 0.5 * mean(deviation["imm7"]));
   EXPECT_LE(mean(deviation["imm7-shadow"]), mean(deviation["single"]));
   EXPECT_LT(mean(deviation["imm7-shadow"]), 0.0015);
-  EXPECT_GE(pooled.trulyDynamic(), 67u);
+  EXPECT_GE(pooled.trulyDynamic(), 55u);
   EXPECT_LE(pooled.movingAsStaticRate(), 0.01);
-  EXPECT_LE(pooled.staticAsDynamicRate(), 0.156);
+  EXPECT_LE(pooled.staticAsDynamicRate(), 0.11);
 }

@@ -12,11 +12,11 @@
  *
  * Truth written with it: groundtruth.txt (the rotation, no translation; composed with the source's own
  * ground truth when it has one), and for a camera that stood still (`still`) motion_labels.txt and
- * masks/ in the renderer's format (0 static world, 1 moving): pixels whose grey level differs from the
- * still camera's background (per pixel, its most frequent grey level among the frames where it is
- * stable: a temporal median fails where a hand stays more than half of the time) by more than a
- * threshold, opened, small holes filled, dilated, warped with the frame. The masks also mark moving shadows and reflections:
- * they move in the image, which is what the classifier decides. */
+ * masks/ in the renderer's format (0 static world, 1 moving): the foreground of OpenCV's Gaussian-mixture
+ * background subtractor (`cv::BackgroundSubtractorMOG2`), learned over the whole video first and then
+ * applied to each frame without learning, opened, small holes filled, dilated, warped with the frame.
+ * Shadows that MOG2 recognises (a darker copy of the background) count as background; reflections and
+ * shadows it does not recognise are marked. */
 #pragma once
 
 #include <immslam/math/types.h>
@@ -42,7 +42,9 @@ struct TRotatedViewOptions
   /** The source camera stood still: write masks/ from the background (and treat the source
    * pose as the identity when the source has no ground truth of its own). */
   bool still = true;
-  double foregroundGrey = 30;     ///< |grey - background| above this marks a moving pixel
+  /** Squared Mahalanobis distance to every background mode above which a pixel is foreground
+   * (`cv::BackgroundSubtractorMOG2`'s varThreshold; 16 = 4 sigma, OpenCV's default). */
+  double varThreshold = 16;
   int dilatePx = 4;               ///< mask dilation radius, px (after a 3x3 opening)
   std::size_t maxFrames = 0;      ///< 0 = all
   double fps = 0;                 ///< frame rate of a video source (0 = the container's, else 30)
