@@ -68,20 +68,25 @@ std::vector<Vec2> CShadowFilter::occupiedPixels() const
   return out;
 }
 
-std::vector<std::int64_t> CShadowFilter::addFeatures(const std::vector<Vec2>& uv)
+std::vector<std::int64_t> CShadowFilter::addFeatures(const std::vector<Vec2>& uv,
+                                                     const std::vector<std::int64_t>& givenIds,
+                                                     const std::vector<std::pair<double, double>>& wPrior)
 {
   std::vector<std::int64_t> ids;
   ids.reserve(uv.size());
-  for (const Vec2& p : uv)
+  for (std::size_t i = 0; i < uv.size(); ++i)
   {
+    const Vec2& p = uv[i];
     if (static_cast<int>(m_features.size()) >= m_opts.max_features || !p.allFinite())
     {
       ids.push_back(-1);
       continue;
     }
     TShadowFeature f;
-    f.ekf = initialiseShadowState(*m_cam, p, m_opts.sigma_pixel, m_opts.init_rho, m_opts.init_rho_std, m_sigmaV);
-    f.id = m_ids ? m_ids() : m_nextId++;
+    const bool prior = i < wPrior.size() && wPrior[i].second > 0;
+    f.ekf = initialiseShadowState(*m_cam, p, m_opts.sigma_pixel, prior ? wPrior[i].first : m_opts.init_rho,
+                                  prior ? wPrior[i].second : m_opts.init_rho_std, m_sigmaV);
+    f.id = i < givenIds.size() && givenIds[i] >= 0 ? givenIds[i] : m_ids ? m_ids() : m_nextId++;
     f.firstFrame = m_motion.frame;
     f.track.start(m_motion.frame, p);
     f.uv = f.predicted = p;
@@ -167,13 +172,15 @@ TPromotion CShadowFilter::makePromotion(const TShadowFeature& f, const TRayTestR
   return p;
 }
 
-std::vector<TPromotion> CShadowFilter::releaseUnresolved(int maxCount, int minMeasured)
+std::vector<TPromotion> CShadowFilter::releaseUnresolved(int maxCount, int minMeasured,
+                                                         const std::unordered_set<std::int64_t>& notReleased)
 {
   std::vector<std::size_t> idx;
   for (std::size_t i = 0; i < m_features.size(); ++i)
   {
     const auto& f = m_features[i];
-    if (f.cls == EShadowClass::Pending && f.measured && f.nMeasured >= minMeasured && f.track.rejections == 0)
+    if (f.cls == EShadowClass::Pending && f.measured && f.nMeasured >= minMeasured && f.track.rejections == 0 &&
+        !notReleased.count(f.id))
       idx.push_back(i);
   }
   std::stable_sort(idx.begin(), idx.end(),

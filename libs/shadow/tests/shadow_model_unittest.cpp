@@ -440,3 +440,35 @@ TEST(ShadowFilter, BookkeepingAndIds)
   CShadowFilter other(opts, cam);
   EXPECT_EQ(other.addFeatures({Vec2(10, 10)})[0], CShadowFilter::kFirstOwnId);
 }
+
+TEST(ShadowFilter, HandedOverFeaturesKeepTheirIdAndMappedDepth)
+{
+  // A SLAM feature that leaves the map keeps its id and enters with the map's inverse distance
+  // (w, sigma_w) instead of the [slam] init_rho prior; sigma_w <= 0 or a negative id falls back to the
+  // defaults. releaseUnresolved() never releases the ids it is told to keep (probation copies).
+  const auto cam = simCamera();
+  CShadowFilter::TOptions opts;
+  std::int64_t next = 700;
+  CShadowFilter filter(opts, cam, [&] { return next++; });
+  TCameraMotion m;
+  filter.processMeasurements(m, {});
+  const auto ids = filter.addFeatures({Vec2(50, 50), Vec2(100, 60), Vec2(150, 70)}, {42, -1, 43},
+                                      {{0.25, 0.01}, {0.25, 0.01}, {0.5, 0.0}});
+  ASSERT_EQ(ids, (std::vector<std::int64_t>{42, 700, 43}));
+  EXPECT_DOUBLE_EQ(filter.feature(42)->ekf.x[kW], 0.25);
+  EXPECT_NEAR(filter.feature(42)->ekf.P(kW, kW), 1e-4, 1e-12);
+  EXPECT_DOUBLE_EQ(filter.feature(700)->ekf.x[kW], 0.25);
+  EXPECT_DOUBLE_EQ(filter.feature(43)->ekf.x[kW], opts.init_rho);  // sigma 0: the default prior
+  EXPECT_NEAR(filter.feature(43)->ekf.P(kW, kW), opts.init_rho_std * opts.init_rho_std, 1e-12);
+  // Still camera, every feature measured where it was for 12 frames: all releasable but 42.
+  for (int k = 1; k <= 12; ++k)
+  {
+    m.frame = k;
+    filter.processMeasurements(m, {{42, Vec2(50, 50)}, {700, Vec2(100, 60)}, {43, Vec2(150, 70)}});
+  }
+  const auto rel = filter.releaseUnresolved(10, 10, {42});
+  ASSERT_EQ(rel.size(), 2u);
+  EXPECT_EQ(rel[0].id, 700);
+  EXPECT_EQ(rel[1].id, 43);
+  EXPECT_NE(filter.feature(42), nullptr);
+}

@@ -34,15 +34,18 @@ const frontend::CFeaturePatch* CShadowTracker::patchOf(std::int64_t id) const
   return it == m_patches.end() ? nullptr : &it->second;
 }
 
-std::vector<std::int64_t> CShadowTracker::addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv)
+std::vector<std::int64_t> CShadowTracker::addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv,
+                                                      const std::vector<std::int64_t>& givenIds,
+                                                      const std::vector<std::pair<double, double>>& wPrior)
 {
   const auto& cam = m_filter.camera();
   if (!grey.empty() && (grey.type() != CV_8UC1 || grey.cols != cam.width() || grey.rows != cam.height()))
     throw std::runtime_error("shadow::CShadowTracker::addFeatures: expected a CV_8UC1 image of the camera's size");
   std::vector<std::int64_t> ids;
   ids.reserve(uv.size());
-  for (const Vec2& p : uv)
+  for (std::size_t i = 0; i < uv.size(); ++i)
   {
+    const Vec2& p = uv[i];
     // The filter refuses first (max_features, not finite); then a patch that does not fit.
     frontend::CFeaturePatch patch;
     const bool refused = m_filter.size() >= static_cast<std::size_t>(m_filter.options().max_features) || !p.allFinite();
@@ -51,7 +54,12 @@ std::vector<std::int64_t> CShadowTracker::addFeatures(const cv::Mat& grey, const
       ids.push_back(-1);
       continue;
     }
-    const std::int64_t id = m_filter.addFeatures({p}).front();
+    const std::int64_t id =
+        m_filter
+            .addFeatures({p}, i < givenIds.size() ? std::vector<std::int64_t>{givenIds[i]} : std::vector<std::int64_t>{},
+                         i < wPrior.size() ? std::vector<std::pair<double, double>>{wPrior[i]}
+                                           : std::vector<std::pair<double, double>>{})
+            .front();
     if (id >= 0 && patch.valid()) m_patches.emplace(id, std::move(patch));
     ids.push_back(id);
   }
@@ -119,9 +127,10 @@ const TShadowReport& CShadowTracker::processMeasurements(const TCameraMotion& mo
   return rep;
 }
 
-std::vector<TPromotion> CShadowTracker::releaseUnresolved(int maxCount, int minMeasured)
+std::vector<TPromotion> CShadowTracker::releaseUnresolved(int maxCount, int minMeasured,
+                                                          const std::unordered_set<std::int64_t>& notReleased)
 {
-  auto out = m_filter.releaseUnresolved(maxCount, minMeasured);
+  auto out = m_filter.releaseUnresolved(maxCount, minMeasured, notReleased);
   forgetDropped();
   return out;
 }

@@ -19,6 +19,7 @@
 
 #include <cstdint>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -45,11 +46,15 @@ class CShadowTracker
 
   /** New features observed at pixels uv of the frame just processed (CShadowFilter::addFeatures).
    * With a non-empty grey their patches are extracted there (-1 returned where it does not fit); an
-   * empty grey stores no patch (processMeasurements only). Returns the ids (-1: refused). */
-  std::vector<std::int64_t> addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv);
+   * empty grey stores no patch (processMeasurements only). Returns the ids (-1: refused). ids and
+   * wPrior as in CShadowFilter::addFeatures (a handed-over SLAM feature's own id and map depth). */
+  std::vector<std::int64_t> addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv,
+                                        const std::vector<std::int64_t>& ids = {},
+                                        const std::vector<std::pair<double, double>>& wPrior = {});
 
   /** Pending features released into SLAM (CShadowFilter::releaseUnresolved). */
-  std::vector<TPromotion> releaseUnresolved(int maxCount, int minMeasured);
+  std::vector<TPromotion> releaseUnresolved(int maxCount, int minMeasured,
+                                            const std::unordered_set<std::int64_t>& notReleased = {});
   /** Removes features by id (CShadowFilter::removeFeatures). */
   void removeFeatures(const std::vector<std::int64_t>& ids);
   /** Measured or predicted pixels of all held features (to keep new detections away). */
