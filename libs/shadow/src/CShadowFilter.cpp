@@ -69,8 +69,7 @@ std::vector<Vec2> CShadowFilter::occupiedPixels() const
 }
 
 std::vector<std::int64_t> CShadowFilter::addFeatures(const std::vector<Vec2>& uv,
-                                                     const std::vector<std::int64_t>& givenIds,
-                                                     const std::vector<std::pair<double, double>>& wPrior)
+                                                     const std::vector<std::int64_t>& givenIds)
 {
   std::vector<std::int64_t> ids;
   ids.reserve(uv.size());
@@ -83,9 +82,7 @@ std::vector<std::int64_t> CShadowFilter::addFeatures(const std::vector<Vec2>& uv
       continue;
     }
     TShadowFeature f;
-    const bool prior = i < wPrior.size() && wPrior[i].second > 0;
-    f.ekf = initialiseShadowState(*m_cam, p, m_opts.sigma_pixel, prior ? wPrior[i].first : m_opts.init_rho,
-                                  prior ? wPrior[i].second : m_opts.init_rho_std, m_sigmaV);
+    f.ekf = initialiseShadowState(*m_cam, p, m_opts.sigma_pixel, m_opts.init_rho, m_opts.init_rho_std, m_sigmaV);
     f.id = i < givenIds.size() && givenIds[i] >= 0 ? givenIds[i] : m_ids ? m_ids() : m_nextId++;
     f.firstFrame = m_motion.frame;
     f.track.start(m_motion.frame, p);

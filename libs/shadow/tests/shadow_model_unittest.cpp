@@ -441,25 +441,24 @@ TEST(ShadowFilter, BookkeepingAndIds)
   EXPECT_EQ(other.addFeatures({Vec2(10, 10)})[0], CShadowFilter::kFirstOwnId);
 }
 
-TEST(ShadowFilter, HandedOverFeaturesKeepTheirIdAndMappedDepth)
+TEST(ShadowFilter, HandedOverFeaturesKeepTheirId)
 {
-  // A SLAM feature that leaves the map keeps its id and enters with the map's inverse distance
-  // (w, sigma_w) instead of the [slam] init_rho prior; sigma_w <= 0 or a negative id falls back to the
-  // defaults. releaseUnresolved() never releases the ids it is told to keep (probation copies).
+  // A SLAM feature that leaves the map keeps its id (a negative id: a new one from the allocator) and
+  // starts from the [slam] init_rho prior like any new feature. releaseUnresolved() never releases
+  // the ids it is told to keep (probation copies).
   const auto cam = simCamera();
   CShadowFilter::TOptions opts;
   std::int64_t next = 700;
   CShadowFilter filter(opts, cam, [&] { return next++; });
   TCameraMotion m;
   filter.processMeasurements(m, {});
-  const auto ids = filter.addFeatures({Vec2(50, 50), Vec2(100, 60), Vec2(150, 70)}, {42, -1, 43},
-                                      {{0.25, 0.01}, {0.25, 0.01}, {0.5, 0.0}});
+  const auto ids = filter.addFeatures({Vec2(50, 50), Vec2(100, 60), Vec2(150, 70)}, {42, -1, 43});
   ASSERT_EQ(ids, (std::vector<std::int64_t>{42, 700, 43}));
-  EXPECT_DOUBLE_EQ(filter.feature(42)->ekf.x[kW], 0.25);
-  EXPECT_NEAR(filter.feature(42)->ekf.P(kW, kW), 1e-4, 1e-12);
-  EXPECT_DOUBLE_EQ(filter.feature(700)->ekf.x[kW], 0.25);
-  EXPECT_DOUBLE_EQ(filter.feature(43)->ekf.x[kW], opts.init_rho);  // sigma 0: the default prior
-  EXPECT_NEAR(filter.feature(43)->ekf.P(kW, kW), opts.init_rho_std * opts.init_rho_std, 1e-12);
+  for (const std::int64_t id : ids)
+  {
+    EXPECT_DOUBLE_EQ(filter.feature(id)->ekf.x[kW], opts.init_rho);
+    EXPECT_NEAR(filter.feature(id)->ekf.P(kW, kW), opts.init_rho_std * opts.init_rho_std, 1e-12);
+  }
   // Still camera, every feature measured where it was for 12 frames: all releasable but 42.
   for (int k = 1; k <= 12; ++k)
   {

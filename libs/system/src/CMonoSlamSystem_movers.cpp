@@ -33,12 +33,11 @@ std::vector<std::pair<std::int64_t, std::int64_t>> CMonoSlamSystem::handOver(con
   std::vector<std::pair<std::int64_t, std::int64_t>> moved;
   if (m_opts.handover_rejections <= 0) return moved;
   // A feature on probation has its copy in the shadow filter already: the copy goes on as an
-  // ordinary pending feature. The others keep their id, with the map's inverse distance as prior.
+  // ordinary pending feature. The others keep their id.
   std::unordered_map<std::int64_t, std::int64_t> copyOf;
   for (const auto& [copy, id] : m_probation) copyOf[id] = copy;
   std::vector<std::int64_t> drop, ids;
   std::vector<Vec2> at;
-  std::vector<std::pair<double, double>> wPrior;
   for (const auto& s : rep.searches)
     if (s.status == slam::TSearchRecord::EStatus::Rejected)
       for (const auto& f : m_slam->features())
@@ -56,14 +55,10 @@ std::vector<std::pair<std::int64_t, std::int64_t>> CMonoSlamSystem::handOver(con
           m_pastOf[f.id] = mappedPast(f, f.id);
           at.push_back(s.z);
           ids.push_back(f.id);
-          const double d = (m_slam->featurePosition(f) - m_slam->cameraPosition()).norm();
-          const double rel = m_pastOf[f.id].empty() ? 0.0 : m_pastOf[f.id].front().rangeRelSigma;
-          // Located in the map (depth to 50 %): its inverse distance; else the [slam] init_rho prior.
-          wPrior.emplace_back(d > 0 ? 1.0 / d : 0.0, m_slam->depthKnown(f) && d > 0 && rel < 0.5 ? std::max(rel, 0.05) / d : 0.0);
         }
   if (drop.empty()) return moved;
   m_slam->removeFeatures(drop);
-  const auto added = m_shadow->addFeatures(grey, at, ids, wPrior);
+  const auto added = m_shadow->addFeatures(grey, at, ids);
   m_frame.handedOver = static_cast<int>(drop.size());
   for (std::size_t k = 0; k < ids.size(); ++k)
   {

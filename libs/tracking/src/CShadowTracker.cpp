@@ -35,8 +35,7 @@ const frontend::CFeaturePatch* CShadowTracker::patchOf(std::int64_t id) const
 }
 
 std::vector<std::int64_t> CShadowTracker::addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv,
-                                                      const std::vector<std::int64_t>& givenIds,
-                                                      const std::vector<std::pair<double, double>>& wPrior)
+                                                      const std::vector<std::int64_t>& givenIds)
 {
   const auto& cam = m_filter.camera();
   if (!grey.empty() && (grey.type() != CV_8UC1 || grey.cols != cam.width() || grey.rows != cam.height()))
@@ -54,12 +53,7 @@ std::vector<std::int64_t> CShadowTracker::addFeatures(const cv::Mat& grey, const
       ids.push_back(-1);
       continue;
     }
-    const std::int64_t id =
-        m_filter
-            .addFeatures({p}, i < givenIds.size() ? std::vector<std::int64_t>{givenIds[i]} : std::vector<std::int64_t>{},
-                         i < wPrior.size() ? std::vector<std::pair<double, double>>{wPrior[i]}
-                                           : std::vector<std::pair<double, double>>{})
-            .front();
+    const std::int64_t id = m_filter.addFeatures({p}, {i < givenIds.size() ? givenIds[i] : -1}).front();
     if (id >= 0 && patch.valid()) m_patches.emplace(id, std::move(patch));
     ids.push_back(id);
   }
