@@ -67,7 +67,7 @@ TEST(MappedMovers, ParkedBoxLeavesTheMapAsDynamicTracksWithItsPast)
   // Limits at about 1.2 x.
   const auto out = outDir("parked_mover");
   ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", "--out", out, "--frames", "150", "--set",
-                    "input.scenario=scenarios/parked-mover.ini", "--set", "output.plots=false"}),
+                    "input.scenario=scenarios/parked-mover.ini"}),
             0);
   const double start = 3.0;
   sim::CSyntheticSource src(sourceDir() + "/ini/scenarios/parked-mover.ini", {}, 150);
@@ -110,7 +110,7 @@ TEST(FirstMapMovers, StillCameraFirstMapIsTestedFromTheFirstFrame)
   // rotation RMSE 0.012 deg. Limits at about 1.2 x.
   const auto out = outDir("first_map_still");
   ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", "--out", out, "--frames", "120", "--set",
-                    "input.scenario=scenarios/still-movers.ini", "--set", "output.plots=false"}),
+                    "input.scenario=scenarios/still-movers.ini"}),
             0);
   sim::CSyntheticSource src(sourceDir() + "/ini/scenarios/still-movers.ini", {}, 120);
   double firstDynamic = -1;

@@ -68,14 +68,12 @@ std::vector<Vec2> CShadowFilter::occupiedPixels() const
   return out;
 }
 
-std::vector<std::int64_t> CShadowFilter::addFeatures(const std::vector<Vec2>& uv,
-                                                     const std::vector<std::int64_t>& givenIds)
+std::vector<std::int64_t> CShadowFilter::addFeatures(const std::vector<Vec2>& uv)
 {
   std::vector<std::int64_t> ids;
   ids.reserve(uv.size());
-  for (std::size_t i = 0; i < uv.size(); ++i)
+  for (const Vec2& p : uv)
   {
-    const Vec2& p = uv[i];
     if (static_cast<int>(m_features.size()) >= m_opts.max_features || !p.allFinite())
     {
       ids.push_back(-1);
@@ -83,7 +81,7 @@ std::vector<std::int64_t> CShadowFilter::addFeatures(const std::vector<Vec2>& uv
     }
     TShadowFeature f;
     f.ekf = initialiseShadowState(*m_cam, p, m_opts.sigma_pixel, m_opts.init_rho, m_opts.init_rho_std, m_sigmaV);
-    f.id = i < givenIds.size() && givenIds[i] >= 0 ? givenIds[i] : m_ids ? m_ids() : m_nextId++;
+    f.id = m_ids ? m_ids() : m_nextId++;
     f.firstFrame = m_motion.frame;
     f.track.start(m_motion.frame, p);
     f.uv = f.predicted = p;

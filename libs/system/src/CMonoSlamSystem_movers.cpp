@@ -33,11 +33,13 @@ std::vector<std::pair<std::int64_t, std::int64_t>> CMonoSlamSystem::handOver(con
   std::vector<std::pair<std::int64_t, std::int64_t>> moved;
   if (m_opts.handover_rejections <= 0) return moved;
   // A feature on probation has its copy in the shadow filter already: the copy goes on as an
-  // ordinary pending feature. The others keep their id.
+  // ordinary pending feature. The others enter as new pending features (a new id: decided static
+  // again, a point that moved and stopped is a new map point, not the old one).
   std::unordered_map<std::int64_t, std::int64_t> copyOf;
   for (const auto& [copy, id] : m_probation) copyOf[id] = copy;
   std::vector<std::int64_t> drop, ids;
   std::vector<Vec2> at;
+  std::vector<std::vector<TMappedPast>> pasts;
   for (const auto& s : rep.searches)
     if (s.status == slam::TSearchRecord::EStatus::Rejected)
       for (const auto& f : m_slam->features())
@@ -52,18 +54,20 @@ std::vector<std::pair<std::int64_t, std::int64_t>> CMonoSlamSystem::handOver(con
             moved.emplace_back(f.id, c->second);
             continue;
           }
-          m_pastOf[f.id] = mappedPast(f, f.id);
+          pasts.push_back(mappedPast(f, -1));
           at.push_back(s.z);
           ids.push_back(f.id);
         }
   if (drop.empty()) return moved;
   m_slam->removeFeatures(drop);
-  const auto added = m_shadow->addFeatures(grey, at, ids);
+  const auto added = m_shadow->addFeatures(grey, at);
   m_frame.handedOver = static_cast<int>(drop.size());
   for (std::size_t k = 0; k < ids.size(); ++k)
   {
     moved.emplace_back(ids[k], added[k]);
-    if (added[k] < 0) m_pastOf.erase(ids[k]);
+    if (added[k] < 0) continue;
+    for (auto& row : pasts[k]) row.id = added[k];
+    m_pastOf[added[k]] = std::move(pasts[k]);
   }
   return moved;
 }

@@ -34,17 +34,15 @@ const frontend::CFeaturePatch* CShadowTracker::patchOf(std::int64_t id) const
   return it == m_patches.end() ? nullptr : &it->second;
 }
 
-std::vector<std::int64_t> CShadowTracker::addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv,
-                                                      const std::vector<std::int64_t>& givenIds)
+std::vector<std::int64_t> CShadowTracker::addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv)
 {
   const auto& cam = m_filter.camera();
   if (!grey.empty() && (grey.type() != CV_8UC1 || grey.cols != cam.width() || grey.rows != cam.height()))
     throw std::runtime_error("shadow::CShadowTracker::addFeatures: expected a CV_8UC1 image of the camera's size");
   std::vector<std::int64_t> ids;
   ids.reserve(uv.size());
-  for (std::size_t i = 0; i < uv.size(); ++i)
+  for (const Vec2& p : uv)
   {
-    const Vec2& p = uv[i];
     // The filter refuses first (max_features, not finite); then a patch that does not fit.
     frontend::CFeaturePatch patch;
     const bool refused = m_filter.size() >= static_cast<std::size_t>(m_filter.options().max_features) || !p.allFinite();
@@ -53,7 +51,7 @@ std::vector<std::int64_t> CShadowTracker::addFeatures(const cv::Mat& grey, const
       ids.push_back(-1);
       continue;
     }
-    const std::int64_t id = m_filter.addFeatures({p}, {i < givenIds.size() ? givenIds[i] : -1}).front();
+    const std::int64_t id = m_filter.addFeatures({p}).front();
     if (id >= 0 && patch.valid()) m_patches.emplace(id, std::move(patch));
     ids.push_back(id);
   }

@@ -146,12 +146,11 @@ class CShadowFilter
 
   /** New features observed at pixels uv of the frame just processed (call after that frame's
    * finishFrame; before the first frame the camera is taken as W's origin). Returns the ids (-1:
-   * refused, e.g. max_features reached or not a finite pixel).
-   * \param ids optional, per feature: the id to use (a SLAM feature handed over keeps its own; < 0 or
-   * absent: a new one from the allocator). Every feature starts from the [slam] init_rho, init_rho_std
-   * prior, a handed-over one too: the map's depth was estimated as if it did not move, and as a prior
-   * it took the three-ray test's power (a pasted mover's moving -> static rate 0.3 -> 1.4 %). */
-  std::vector<std::int64_t> addFeatures(const std::vector<Vec2>& uv, const std::vector<std::int64_t>& ids = {});
+   * refused, e.g. max_features reached or not a finite pixel). Every feature starts from the [slam]
+   * init_rho, init_rho_std prior, a SLAM feature handed over too: the map's depth was estimated as if
+   * it did not move, and as a prior it took the three-ray test's power (a pasted mover's moving ->
+   * static rate 0.3 -> 1.4 %). */
+  std::vector<std::int64_t> addFeatures(const std::vector<Vec2>& uv);
 
   /** Measured or predicted pixels of all held features (to keep new detections away). */
   std::vector<Vec2> occupiedPixels() const;

@@ -46,10 +46,8 @@ class CShadowTracker
 
   /** New features observed at pixels uv of the frame just processed (CShadowFilter::addFeatures).
    * With a non-empty grey their patches are extracted there (-1 returned where it does not fit); an
-   * empty grey stores no patch (processMeasurements only). Returns the ids (-1: refused). ids as in
-   * CShadowFilter::addFeatures (a handed-over SLAM feature keeps its own). */
-  std::vector<std::int64_t> addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv,
-                                        const std::vector<std::int64_t>& ids = {});
+   * empty grey stores no patch (processMeasurements only). Returns the ids (-1: refused). */
+  std::vector<std::int64_t> addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv);
 
   /** Pending features released into SLAM (CShadowFilter::releaseUnresolved). */
   std::vector<TPromotion> releaseUnresolved(int maxCount, int minMeasured,
