@@ -547,11 +547,11 @@ TEST(ShadowSystem, RealVideoOfPeopleWalkingSeenByARotatingCamera)
   // With watched features ([system] watch_features = 10) the people are seen while the map is
   // complete (none without them): 300 frames, 35 of 36 decisions on people dynamic, 2 of 140 on the courtyard dynamic.
   EXPECT_LE(full.decisions.dynamicAsStatic, 0u) << "nothing moving enters the map";
-  // With the first map's probation: 28 decisions on people dynamic, static->dynamic 2.6 % (the
-  // probation copies add decisions on the first map). Limits ~1.2x.
+  // With the first map's probation and the MOG2 masks: 28 decisions on people dynamic, static->dynamic
+  // 3.4 % (the probation copies add decisions on the first map). Limits ~1.2x.
   EXPECT_GE(watching.decisions.trulyDynamic(), 23u);
   EXPECT_LE(watching.decisions.movingAsStaticRate(), 0.095);
-  EXPECT_LE(watching.decisions.staticAsDynamicRate(), 0.031);
+  EXPECT_LE(watching.decisions.staticAsDynamicRate(), 0.041);
 }
 
 TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)
