@@ -269,9 +269,11 @@ TEST(ShadowSystem, ExclusionMasksDisableTheMovingObjectsAsInFig5a)
   EXPECT_GT(res.confusion.trulyDynamic(), 0u);
   std::printf("seed 7 with the moving objects disabled (Fig. 5(a)): IMM %.3f %% of path, full system %.3f %%\n",
               100 * ate["imm7.ini"], 100 * ate["imm7-shadow.ini"]);
-  // Measured 2026-11-27: IMM 1.095 %, full system 0.804 % of path; limits ~1.2x.
+  // Measured: IMM 1.095 %, full system 1.068 % of path (0.804 % before the weighted RANSAC and the
+  // first map's probation: on this one seed they cost; over 40 hold-out seeds the full system's
+  // static-world median gains, doc/shadow.md "Movers in the map"); limits ~1.2x.
   EXPECT_LE(ate["imm7.ini"], 0.0131);
-  EXPECT_LE(ate["imm7-shadow.ini"], 0.0097);
+  EXPECT_LE(ate["imm7-shadow.ini"], 0.0128);
 }
 
 TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
@@ -393,9 +395,11 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
               viPooled.trulyDynamic(), viPooled.staticAsDynamic, viPooled.trulyStatic());
   // Measured 2026-11-27: median 1.986 % (1.816-2.332) vs 1.938 % on the clean sequence (ratio 1.02);
   // the clean sequence itself gives 1.88-3.05 % over start-up variations (doc/shadow.md); moving->static
-  // 0 of 144 (static->dynamic 147 of 154: the desk's background corners mix both). Limits ~1.2x.
-  EXPECT_LE(median(ates), 1.23 * clean.ate->rmseOverPath);
-  EXPECT_LE(median(ates), 0.0238);
+  // 0 of 144 (static->dynamic 147 of 154: the desk's background corners mix both). With the handling of
+  // movers outside the paper's assumptions (doc/shadow.md, "Movers in the map"): median 2.498 %
+  // (1.852-2.688) vs 2.025 % clean (ratio 1.23), moving->static 0 of 123. Limits ~1.2x.
+  EXPECT_LE(median(ates), 1.48 * clean.ate->rmseOverPath);
+  EXPECT_LE(median(ates), 0.030);
   EXPECT_GE(viPooled.trulyDynamic(), 120u);
   EXPECT_LE(viPooled.movingAsStaticRate(), 0.01);
 }
@@ -543,9 +547,11 @@ TEST(ShadowSystem, RealVideoOfPeopleWalkingSeenByARotatingCamera)
   // With watched features ([system] watch_features = 10) the people are seen while the map is
   // complete (none without them): 300 frames, 35 of 36 decisions on people dynamic, 2 of 140 on the courtyard dynamic.
   EXPECT_LE(full.decisions.dynamicAsStatic, 0u) << "nothing moving enters the map";
-  EXPECT_GE(watching.decisions.trulyDynamic(), 31u);
+  // With the first map's probation and the MOG2 masks: 28 decisions on people dynamic, static->dynamic
+  // 3.4 % (the probation copies add decisions on the first map). Limits ~1.2x.
+  EXPECT_GE(watching.decisions.trulyDynamic(), 23u);
   EXPECT_LE(watching.decisions.movingAsStaticRate(), 0.095);
-  EXPECT_LE(watching.decisions.staticAsDynamicRate(), 0.018);
+  EXPECT_LE(watching.decisions.staticAsDynamicRate(), 0.041);
 }
 
 TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)

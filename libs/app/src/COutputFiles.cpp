@@ -80,6 +80,10 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
     for (const auto& d : fr.shadow->decisions)
       m_classes->addCells({r.timestamp, d.id, shadow::className(d.cls), d.uv.x(), d.uv.y()});
     m_classes->flush();
+    // Tracks decided dynamic in this frame that were mapped first start where the map held them.
+    for (const auto& m : fr.mappedPast)
+      m_tracks->addCells({m.timestamp, m.id, m.p_W.x(), m.p_W.y(), m.p_W.z(), m.uv.x(), m.uv.y(), 0.0, 0.0, 0.0, m.range,
+                          m.rangeRelSigma});
     for (const auto& t : fr.shadow->tracks)
       if (t.measured)
       {

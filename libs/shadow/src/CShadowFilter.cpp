@@ -167,13 +167,15 @@ TPromotion CShadowFilter::makePromotion(const TShadowFeature& f, const TRayTestR
   return p;
 }
 
-std::vector<TPromotion> CShadowFilter::releaseUnresolved(int maxCount, int minMeasured)
+std::vector<TPromotion> CShadowFilter::releaseUnresolved(int maxCount, int minMeasured,
+                                                         const std::unordered_set<std::int64_t>& notReleased)
 {
   std::vector<std::size_t> idx;
   for (std::size_t i = 0; i < m_features.size(); ++i)
   {
     const auto& f = m_features[i];
-    if (f.cls == EShadowClass::Pending && f.measured && f.nMeasured >= minMeasured && f.track.rejections == 0)
+    if (f.cls == EShadowClass::Pending && f.measured && f.nMeasured >= minMeasured && f.track.rejections == 0 &&
+        !notReleased.count(f.id))
       idx.push_back(i);
   }
   std::stable_sort(idx.begin(), idx.end(),

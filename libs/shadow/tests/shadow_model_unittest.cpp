@@ -440,3 +440,28 @@ TEST(ShadowFilter, BookkeepingAndIds)
   CShadowFilter other(opts, cam);
   EXPECT_EQ(other.addFeatures({Vec2(10, 10)})[0], CShadowFilter::kFirstOwnId);
 }
+
+TEST(ShadowFilter, ReleaseKeepsTheFeaturesItIsToldToKeep)
+{
+  // releaseUnresolved() never releases the ids it is told to keep (the system's probation copies of
+  // first-map features, which SLAM holds already).
+  const auto cam = simCamera();
+  CShadowFilter::TOptions opts;
+  std::int64_t next = 700;
+  CShadowFilter filter(opts, cam, [&] { return next++; });
+  TCameraMotion m;
+  filter.processMeasurements(m, {});
+  const auto ids = filter.addFeatures({Vec2(50, 50), Vec2(100, 60), Vec2(150, 70)});
+  ASSERT_EQ(ids, (std::vector<std::int64_t>{700, 701, 702}));
+  // Still camera, every feature measured where it was for 12 frames: all releasable but 700.
+  for (int k = 1; k <= 12; ++k)
+  {
+    m.frame = k;
+    filter.processMeasurements(m, {{700, Vec2(50, 50)}, {701, Vec2(100, 60)}, {702, Vec2(150, 70)}});
+  }
+  const auto rel = filter.releaseUnresolved(10, 10, {700});
+  ASSERT_EQ(rel.size(), 2u);
+  EXPECT_EQ(rel[0].id, 701);
+  EXPECT_EQ(rel[1].id, 702);
+  EXPECT_NE(filter.feature(700), nullptr);
+}

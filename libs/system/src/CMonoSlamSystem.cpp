@@ -235,8 +235,11 @@ int CMonoSlamSystem::promoteFromShadow(const shadow::TShadowReport& srep, const 
 {
   // Promotions into SLAM keep their ids and the shadow's inverse-depth estimate as the prior.
   std::vector<shadow::TPromotion> promotions = srep.promotions;
+  settleProbation(srep, promotions);
   if (holding) promotions.clear();
   retireWatched(promotions);
+  std::vector<std::int64_t> decidedStatic;
+  for (const auto& p : promotions) decidedStatic.push_back(p.id);
   // Without parallax nothing can be classified. While the IMM says the camera is not translating
   // (stationary and rotation families dominate), the SLAM takes the unresolved features it needs,
   // as the IMM paper's filter does with inverse depth; with translation, only when starving.
@@ -248,7 +251,9 @@ int CMonoSlamSystem::promoteFromShadow(const shadow::TShadowReport& srep, const 
   const int need = pGeneral < 0.5 ? m_slam->options().min_visible_features : m_opts.starved_below;
   if (!holding && m_opts.starved_below > 0 && inView < need)
   {
-    const auto rel = m_shadow->releaseUnresolved(need - inView, m_opts.release_min_measured);
+    std::unordered_set<std::int64_t> copies;
+    for (const auto& c : m_probation) copies.insert(c.first);
+    const auto rel = m_shadow->releaseUnresolved(need - inView, m_opts.release_min_measured, copies);
     m_frame.released = static_cast<int>(rel.size());
     promotions.insert(promotions.end(), rel.begin(), rel.end());
   }
@@ -262,40 +267,18 @@ int CMonoSlamSystem::promoteFromShadow(const shadow::TShadowReport& srep, const 
     ids.push_back(p.id);
   }
   m_frame.promoted = countAdded(m_slam->addFeaturesAt(grey, uv, prior, ids));
+  m_slam->markStaticDecided(decidedStatic);
   int pendingVisible = 0;
   // Watched features do not count as SLAM's: they are not there for SLAM (watch_features).
   m_watchedVisible = 0;
   for (const auto& v : srep.views)
-    if (v.cls == shadow::EShadowClass::Pending && v.searched) ++(m_watched.count(v.id) ? m_watchedVisible : pendingVisible);
+    if (v.cls == shadow::EShadowClass::Pending && v.searched)
+      ++(m_watched.count(v.id) || m_probation.count(v.id) ? m_watchedVisible : pendingVisible);
   // Outcomes of the pending features that left the shadow filter this frame (pendingWeight()).
   const int became = srep.nPromoted + m_frame.released;
   m_becameSlam = kOutcomeDecay * m_becameSlam + became;
   m_left = kOutcomeDecay * m_left + became + srep.nNewDynamic + srep.nLost + srep.nTimedOut;
   return pendingVisible;
-}
-
-std::vector<std::pair<std::int64_t, std::int64_t>> CMonoSlamSystem::handOver(const slam::TFrameReport& rep,
-                                                                              const cv::Mat& grey)
-{
-  // SLAM features rejected frame after frame: handed back to the shadow filter at their pixel.
-  std::vector<std::pair<std::int64_t, std::int64_t>> moved;
-  if (m_opts.handover_rejections <= 0) return moved;
-  std::vector<std::int64_t> drop;
-  std::vector<Vec2> at;
-  for (const auto& s : rep.searches)
-    if (s.status == slam::TSearchRecord::EStatus::Rejected)
-      for (const auto& f : m_slam->features())
-        if (f.id == s.id && f.rejectedInRow >= m_opts.handover_rejections)
-        {
-          drop.push_back(f.id);
-          at.push_back(s.z);
-        }
-  if (drop.empty()) return moved;
-  m_slam->removeFeatures(drop);
-  const auto ids = m_shadow->addFeatures(grey, at);
-  m_frame.handedOver = static_cast<int>(drop.size());
-  for (std::size_t k = 0; k < drop.size(); ++k) moved.emplace_back(drop[k], ids[k]);
-  return moved;
 }
 
 int CMonoSlamSystem::newFeaturesWanted(int slamInView, int pendingVisible, bool holding, bool& firstMap) const
@@ -349,13 +332,20 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
       {
         const auto added = m_slam->addFeaturesAt(grey, uv);
         if (firstMap) m_frame.newFirstMap = countAdded(added);
+        if (firstMap && m_shadow) startProbation(grey, added);
       }
     }
     if (m_shadow && !holding && !firstMap)
       addWatchedFeatures(grey, pendingVisible + m_watchedVisible + m_frame.newShadow, m_shadow->occupiedPixels());
   }
-  m_prevR = m_slam->cameraPosition();
-  m_prevQ = m_slam->cameraOrientation();
+  else if (m_shadow)
+  {
+    // The first map: nothing to classify it against yet; its copies are classified from now on.
+    std::vector<std::int64_t> ids;
+    for (const auto& f : m_slam->features()) ids.push_back(f.id);
+    startProbation(grey, ids);
+  }
+  endFrame(timestamp);
   m_frame.totalMs = msSince(t0);
   return m_frame;
 }
@@ -433,8 +423,7 @@ const TSystemFrame& CMonoSlamSystem::processMeasurements(double timestamp,
     for (std::size_t k = 0; k < ids.size(); ++k)
       if (ids[k] >= 0) m_trackToFeature[tracks[k]] = ids[k];
   }
-  m_prevR = m_slam->cameraPosition();
-  m_prevQ = m_slam->cameraOrientation();
+  endFrame(timestamp);
   m_frame.totalMs = msSince(t0);
   return m_frame;
 }

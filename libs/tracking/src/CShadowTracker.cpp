@@ -119,9 +119,10 @@ const TShadowReport& CShadowTracker::processMeasurements(const TCameraMotion& mo
   return rep;
 }
 
-std::vector<TPromotion> CShadowTracker::releaseUnresolved(int maxCount, int minMeasured)
+std::vector<TPromotion> CShadowTracker::releaseUnresolved(int maxCount, int minMeasured,
+                                                          const std::unordered_set<std::int64_t>& notReleased)
 {
-  auto out = m_filter.releaseUnresolved(maxCount, minMeasured);
+  auto out = m_filter.releaseUnresolved(maxCount, minMeasured, notReleased);
   forgetDropped();
   return out;
 }

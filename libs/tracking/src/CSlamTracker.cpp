@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 #include <numeric>
 #include <sstream>
+#include <unordered_set>
 #include <stdexcept>
 
 namespace immslam::slam
@@ -157,18 +158,32 @@ void CSlamTracker::updateWithAll(const std::vector<TCandidate>& cands)
 void CSlamTracker::associateAndUpdate(std::vector<TCandidate>& cands)
 {
   auto t = Clock::now();
-  const std::vector<int> low = m_ransac.lowInnovationInliers(
+  // Each match votes with its feature's static evidence (age, static decision): the consensus taken
+  // is the static world's even where a mover holds more matches.
+  // Matches outside their ellipse (a feature that may have started to move) take no part.
+  std::vector<TCandidate> gated;
+  std::vector<int> gatedIndex;
+  for (int c = 0; c < static_cast<int>(cands.size()); ++c)
+  {
+    cands[c].weight = staticEvidence(m_filter.features()[cands[c].feature]);
+    if (cands[c].outsideGate) continue;
+    gated.push_back(cands[c]);
+    gatedIndex.push_back(c);
+  }
+  std::vector<int> low = m_ransac.lowInnovationInliers(
       m_filter.camera(), m_filter.predictedMean(), [this](int off, int len) { return m_filter.predictedCovColumns(off, len); },
-      m_filter.features(), cands, m_rng, &m_report.nHypotheses);
+      m_filter.features(), gated, m_rng, &m_report.nHypotheses);
+  for (int& c : low) c = gatedIndex[c];
   m_report.tRansacMs = msSince(t);
 
   t = Clock::now();
   m_report.nMatched += m_filter.update(cands, low);
   m_report.nLowInnovation = m_report.nMatched;
-  std::vector<char> used(cands.size(), 0);
-  for (int c : low) used[c] = 1;
+  std::vector<char> used(cands.size(), 0), skip(cands.size(), 0);
+  for (int c : low) used[c] = skip[c] = 1;
+  for (int c = 0; c < static_cast<int>(cands.size()); ++c) skip[c] |= cands[c].outsideGate ? 1 : 0;
   const std::vector<int> high =
-      m_filter.rescueGate(cands, used, math::chi2Quantile(m_ransac.options().rescue_probability, 2));
+      m_filter.rescueGate(cands, skip, math::chi2Quantile(m_ransac.options().rescue_probability, 2));
   m_report.nMatched += m_filter.update(cands, high);
   m_report.nRescued = m_report.nMatched - m_report.nLowInnovation;
   const auto act = m_filter.finishUpdate();
@@ -189,6 +204,13 @@ void CSlamTracker::associateAndUpdate(std::vector<TCandidate>& cands)
   m_report.tMapMs = msSince(t);
 }
 
+void CSlamTracker::markStaticDecided(const std::vector<std::int64_t>& ids)
+{
+  const std::unordered_set<std::int64_t> set(ids.begin(), ids.end());
+  for (int k = 0; k < static_cast<int>(m_filter.features().size()); ++k)
+    if (set.count(m_filter.features()[k].id)) m_filter.featureRecord(k).staticDecided = true;
+}
+
 void CSlamTracker::recordStatuses(const std::vector<TCandidate>& cands, const std::vector<char>& used,
                                   const std::vector<int>& high)
 {
@@ -206,6 +228,11 @@ void CSlamTracker::recordStatuses(const std::vector<TCandidate>& cands, const st
     // Track record of outlier rejections (a feature that starts moving is rejected frame after frame).
     TFeature& f = m_filter.featureRecord(cands[c].feature);
     f.rejectedInRow = rec.status == TSearchRecord::EStatus::Rejected ? f.rejectedInRow + 1 : 0;
+    if (rec.status != TSearchRecord::EStatus::Rejected)
+    {
+      f.tLastInlier = m_report.timestamp;
+      f.uvLastInlier = rec.z;
+    }
   }
 }
 }  // namespace immslam::slam

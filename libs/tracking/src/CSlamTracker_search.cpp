@@ -7,6 +7,8 @@
 #include <immslam/slam/measurement.h>
 
 #include <Eigen/Cholesky>
+#include <algorithm>
+#include <functional>
 #include <unordered_map>
 
 namespace immslam::slam
@@ -22,7 +24,15 @@ struct TSearchJob
   Mat2F Jf;
   Mat2 S;
   frontend::TSearchResult res;
+  bool outside = false;  ///< found outside the 95 % ellipse (the search for a feature that started moving)
 };
+
+/** Image motion (px, 1 sigma) added to the search of a feature found in the previous frame and lost
+ * now: its 95 % region reaches about 10 px, 3-4 frames of an object that started to move at 2-3 px
+ * per frame (the handover needs 3 rejections in a row). */
+constexpr double kStartedMovingSigmaPx = 4.0;
+/** Correlation a match of that search needs (at least [slam] min_ncc). */
+constexpr double kStartedMovingMinNcc = 0.9;
 
 frontend::TSearchParams searchParams(const CSlamTracker::TOptions& o)
 {
@@ -31,6 +41,59 @@ frontend::TSearchParams searchParams(const CSlamTracker::TOptions& o)
   sp.minScore = o.min_ncc;
   sp.maxHalfExtentPx = o.max_search_half_extent_px;
   return sp;
+}
+
+/** Searches again, in parallel, the jobs for which again(j) holds, in their ellipse S k2 + grow. */
+void searchAgain(math::CThreadPool& pool, const cv::Mat& grey, const std::vector<cv::Mat>& templates, double k2,
+                 const Mat2& grow, const frontend::TSearchParams& sp, std::vector<TSearchJob>& jobs,
+                 const std::function<bool(const TSearchJob&)>& again)
+{
+  pool.parallelFor(0, static_cast<int>(jobs.size()), [&](int idx) {
+    TSearchJob& j = jobs[idx];
+    if (again(j)) j.res = frontend::searchInEllipse(grey, templates[idx], j.h, j.S * k2 + grow, sp);
+  });
+}
+
+/** The second searches of the features not found in their ellipse; returns true when it was the
+ * expanded search of a motion no model predicted. */
+bool searchMissed(math::CThreadPool& pool, const cv::Mat& grey, const std::vector<cv::Mat>& templates,
+                  const frontend::TSearchParams& sp, const CSlamTracker::TOptions& o, const std::vector<TFeature>& features,
+                  std::int64_t frame, std::vector<TSearchJob>& jobs)
+{
+  // Expanded search: when the motion was not predicted (an acceleration beyond every model), most
+  // matches fall outside their ellipses together. The features not found are searched again in
+  // ellipses grown by expand_search_factor; 1-point RANSAC then decides with the filter's own S
+  // (a hypothesis from one such match must be supported by the others).
+  int nFound = 0;
+  for (const auto& j : jobs) nFound += j.res.found ? 1 : 0;
+  const double k2 = o.expand_search_factor * o.expand_search_factor;
+  if (o.expand_search_factor > 1 && !jobs.empty() && nFound < o.expand_below_fraction * jobs.size())
+  {
+    searchAgain(pool, grey, templates, k2, Mat2::Zero(), sp, jobs, [](const TSearchJob& j) { return !j.res.found; });
+    return true;
+  }
+  // A feature found in the previous frame and not in its ellipse now may have started to move (a
+  // mapped object that leaves; a well-mapped feature's ellipse is 1-2 px across): it is searched
+  // again in its ellipse grown by expand_search_factor and by kStartedMovingSigmaPx, so that 1-point
+  // RANSAC sees where it went; rejected frame after frame, it is handed over (doc/shadow.md).
+  if (o.expand_search_factor > 1)
+  {
+    // A wider region holds more look-alikes: the match must be closer (an occluded static feature
+    // must not be taken elsewhere and handed over).
+    frontend::TSearchParams spMoved = sp;
+    spMoved.minScore = std::max(sp.minScore, kStartedMovingMinNcc);
+    const std::int64_t previous = frame - 1;
+    const auto lostNow = [&](const TSearchJob& j) { return !j.res.found && features[j.k].lastFoundFrame == previous; };
+    for (auto& j : jobs) j.outside = lostNow(j);  // searched again: outside its ellipse if found
+    searchAgain(pool, grey, templates, k2, kStartedMovingSigmaPx * kStartedMovingSigmaPx * Mat2::Identity(), spMoved,
+                jobs, [](const TSearchJob& j) { return j.outside; });
+    for (auto& j : jobs)
+    {
+      const Vec2 nu = j.res.uv - j.h;
+      j.outside = j.outside && j.res.found && nu.dot(j.S.ldlt().solve(nu)) > sp.gateChi2;
+    }
+  }
+  return false;
 }
 }  // namespace
 
@@ -81,21 +144,7 @@ std::vector<TCandidate> CSlamTracker::searchFeatures(const cv::Mat& grey)
     templates[idx] = j.patch->predictTemplate(A);
     j.res = frontend::searchInEllipse(grey, templates[idx], j.h, j.S, sp);
   });
-  // Expanded search: when the motion was not predicted (an acceleration beyond every model), most
-  // matches fall outside their ellipses together. The features not found are searched again in
-  // ellipses grown by expand_search_factor; 1-point RANSAC then decides with the filter's own S
-  // (a hypothesis from one such match must be supported by the others).
-  int nFound = 0;
-  for (const auto& j : jobs) nFound += j.res.found ? 1 : 0;
-  if (m_opts.expand_search_factor > 1 && !jobs.empty() && nFound < m_opts.expand_below_fraction * jobs.size())
-  {
-    m_report.expandedSearch = true;
-    const double k2 = m_opts.expand_search_factor * m_opts.expand_search_factor;
-    pool.parallelFor(0, static_cast<int>(jobs.size()), [&](int idx) {
-      TSearchJob& j = jobs[idx];
-      if (!j.res.found) j.res = frontend::searchInEllipse(grey, templates[idx], j.h, j.S * k2, sp);
-    });
-  }
+  m_report.expandedSearch = searchMissed(pool, grey, templates, sp, m_opts, features, m_filter.frame(), jobs);
 
   std::vector<TCandidate> cands;
   double areaSum = 0;
@@ -105,6 +154,7 @@ std::vector<TCandidate> CSlamTracker::searchFeatures(const cv::Mat& grey)
     if (j.res.found && frontend::maskedAt(m_excluded, j.res.uv)) j.res.found = false;
     areaSum += frontend::ellipseArea(j.S, sp.gateChi2);
     recordSearch(j.k, j.h, j.Jf, j.S, j.res.found, j.res.uv, j.res.score, cands);
+    if (j.res.found && j.outside) cands.back().outsideGate = true;
   }
   m_report.meanSearchAreaPx2 = jobs.empty() ? 0.0 : areaSum / jobs.size();
   m_report.nFound = static_cast<int>(cands.size());
@@ -126,6 +176,7 @@ void CSlamTracker::recordSearch(int k, const Vec2& h, const Mat2F& Jf, const Mat
   rec.z = z;
   rec.score = score;
   m_report.searches.push_back(rec);
+  if (found) f.lastFoundFrame = m_filter.frame();
   if (found) cands.push_back(TCandidate{k, z, h, Jf, S});
 }
 

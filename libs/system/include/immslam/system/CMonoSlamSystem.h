@@ -13,6 +13,7 @@
 #include <mrpt/config/CLoadableOptions.h>
 #include <opencv2/core/mat.hpp>
 
+#include <deque>
 #include <map>
 #include <memory>
 #include <set>
@@ -22,6 +23,20 @@
 
 namespace immslam::system
 {
+/** A past position of a dynamic track taken from the map: a SLAM feature that turned out to move
+ * (handed over, or a first-map feature whose probation copy was decided dynamic) was held static
+ * there, from its first observation to its last inlier. Rows of tracks.csv written at the track's
+ * dynamic decision, before its own rows. */
+struct TMappedPast
+{
+  std::int64_t id = -1;       ///< the dynamic track's id
+  double timestamp = 0;       ///< when it was seen there
+  Vec3 p_W = Vec3::Zero();    ///< the map's estimate of its position (SLAM lengths)
+  Vec2 uv = Vec2::Zero();     ///< the pixel it was seen at then
+  double range = 0;           ///< distance from the camera then
+  double rangeRelSigma = 0;   ///< relative 1-sigma of that distance (the map's)
+};
+
 /** Result of one frame of the whole system. */
 struct TSystemFrame
 {
@@ -37,6 +52,10 @@ struct TSystemFrame
   int newFirstMap = 0;
   int newWatch = 0;     ///< of newShadow, the ones only watched (SLAM did not need them)
   int retired = 0;      ///< watched features decided static (never promoted into SLAM)
+  /** First-map features removed from SLAM because their probation copy was decided dynamic. */
+  int firstMapMovers = 0;
+  /** The mapped past of the tracks decided dynamic in this frame (TMappedPast). */
+  std::vector<TMappedPast> mappedPast;
   double shadowMs = 0;  ///< wall time of the shadow filter
   double totalMs = 0;   ///< wall time of processFrame (image decoding excluded)
 };
@@ -163,6 +182,19 @@ class CMonoSlamSystem
   void addWatchedFeatures(const cv::Mat& grey, int pendingSearched, std::vector<Vec2> avoid);
   /** Retires the promotions of watched features (they never enter SLAM). */
   void retireWatched(std::vector<shadow::TPromotion>& promotions);
+  /** Probation of a first map (features put straight into SLAM, nothing to classify them against):
+   * a copy of each goes to the shadow filter at its pixel. */
+  void startProbation(const cv::Mat& grey, const std::vector<std::int64_t>& slamIds);
+  /** The copies' decisions: static marks the SLAM feature staticDecided (the copy is not promoted),
+   * dynamic removes the SLAM feature (its mapped past goes to the copy's track). Also forgets the
+   * mapped past of tracks that left the shadow filter and emits that of tracks decided dynamic. */
+  void settleProbation(const shadow::TShadowReport& srep, std::vector<shadow::TPromotion>& promotions);
+  /** Where a SLAM feature was mapped, as rows of the track `trackId` (TMappedPast). */
+  std::vector<TMappedPast> mappedPast(const slam::TFeature& f, std::int64_t trackId) const;
+  /** Keeps the camera centre (mapped pasts' ranges) and pose (next frame's motion) of this frame. */
+  void endFrame(double timestamp);
+  /** Its pixel in the current camera (false: behind it). */
+  bool pixelOf(const slam::TFeature& f, Vec2& uv) const;
 
   TOptions m_opts;
   TSearchOptions m_searchOpts;
@@ -180,6 +212,12 @@ class CMonoSlamSystem
   int m_watchedVisible = 0;                    ///< of them, pending and searched in this frame
   /** Retired watched features: unit bearing in W and the frame until which it is kept clear. */
   std::vector<std::pair<Vec3, std::int64_t>> m_retired;  ///< processMeasurements: caller's track -> feature id
+  /** Probation copies in the shadow filter: copy id -> the SLAM feature it tests (startProbation). */
+  std::unordered_map<std::int64_t, std::int64_t> m_probation;
+  /** Mapped past of shadow features that left the map, emitted at their dynamic decision. */
+  std::unordered_map<std::int64_t, std::vector<TMappedPast>> m_pastOf;
+  /** Recent camera centres by timestamp (ranges of TMappedPast), at most kCameraPathFrames. */
+  std::deque<std::pair<double, Vec3>> m_cameraPath;
   Vec3 m_prevR = Vec3::Zero();
   Vec4 m_prevQ = Vec4(1, 0, 0, 0);
 };

@@ -19,6 +19,7 @@
 
 #include <cstdint>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -49,7 +50,8 @@ class CShadowTracker
   std::vector<std::int64_t> addFeatures(const cv::Mat& grey, const std::vector<Vec2>& uv);
 
   /** Pending features released into SLAM (CShadowFilter::releaseUnresolved). */
-  std::vector<TPromotion> releaseUnresolved(int maxCount, int minMeasured);
+  std::vector<TPromotion> releaseUnresolved(int maxCount, int minMeasured,
+                                            const std::unordered_set<std::int64_t>& notReleased = {});
   /** Removes features by id (CShadowFilter::removeFeatures). */
   void removeFeatures(const std::vector<std::int64_t>& ids);
   /** Measured or predicted pixels of all held features (to keep new detections away). */
