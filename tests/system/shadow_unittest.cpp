@@ -269,8 +269,8 @@ TEST(ShadowSystem, ExclusionMasksDisableTheMovingObjectsAsInFig5a)
   EXPECT_GT(res.confusion.trulyDynamic(), 0u);
   std::printf("seed 7 with the moving objects disabled (Fig. 5(a)): IMM %.3f %% of path, full system %.3f %%\n",
               100 * ate["imm7.ini"], 100 * ate["imm7-shadow.ini"]);
-  // Measured: IMM 1.095 %, full system 1.068 % of path (0.804 % before the weighted RANSAC and the
-  // first map's probation: on this one seed they cost; over 40 hold-out seeds the full system's
+  // Measured: IMM 1.097 %, full system 1.068 % of path (0.804 % before the first map's probation:
+  // on this one seed it costs; over 40 hold-out seeds the full system's
   // static-world median gains, doc/shadow.md "Movers in the map"); limits ~1.2x.
   EXPECT_LE(ate["imm7.ini"], 0.0131);
   EXPECT_LE(ate["imm7-shadow.ini"], 0.0128);
