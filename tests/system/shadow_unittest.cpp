@@ -610,11 +610,13 @@ TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)
   // Measured (the hand and the box cut out by imm-rotate's MOG2 masks): full system 0.102 / 0.090 /
   // 0.101 % (mean 0.098 %; IMM without shadow filter 0.914 / 0.578 / 1.301 %, single model 0.968 /
   // 0.699 / 0.231 %); none of 66 decisions on the hand and the box static; static->dynamic 26 of 290.
+  // With the first map's probation and the handover of mapped movers: mean 0.138 %, 0 of 146 on the
+  // hand and the box static, static->dynamic 66 of 525 (the probation copies add decisions).
   // Limits ~1.2x.
   EXPECT_LE(mean(deviation["imm7-shadow"]), 0.5 * mean(deviation["imm7"]));
   EXPECT_LE(mean(deviation["imm7-shadow"]), mean(deviation["single"]));
   EXPECT_LT(mean(deviation["imm7-shadow"]), 0.0015);
   EXPECT_GE(pooled.trulyDynamic(), 55u);
   EXPECT_LE(pooled.movingAsStaticRate(), 0.01);
-  EXPECT_LE(pooled.staticAsDynamicRate(), 0.11);
+  EXPECT_LE(pooled.staticAsDynamicRate(), 0.151);
 }
