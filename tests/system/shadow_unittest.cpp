@@ -269,8 +269,8 @@ TEST(ShadowSystem, ExclusionMasksDisableTheMovingObjectsAsInFig5a)
   EXPECT_GT(res.confusion.trulyDynamic(), 0u);
   std::printf("seed 7 with the moving objects disabled (Fig. 5(a)): IMM %.3f %% of path, full system %.3f %%\n",
               100 * ate["imm7.ini"], 100 * ate["imm7-shadow.ini"]);
-  // Measured: IMM 1.095 %, full system 1.068 % of path (0.804 % before the weighted RANSAC and the
-  // first map's probation: on this one seed they cost; over 40 hold-out seeds the full system's
+  // Measured: IMM 1.097 %, full system 1.068 % of path (0.804 % before the first map's probation:
+  // on this one seed it costs; over 40 hold-out seeds the full system's
   // static-world median gains, doc/shadow.md "Movers in the map"); limits ~1.2x.
   EXPECT_LE(ate["imm7.ini"], 0.0131);
   EXPECT_LE(ate["imm7-shadow.ini"], 0.0128);
@@ -610,11 +610,13 @@ TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)
   // Measured (the hand and the box cut out by imm-rotate's MOG2 masks): full system 0.102 / 0.090 /
   // 0.101 % (mean 0.098 %; IMM without shadow filter 0.914 / 0.578 / 1.301 %, single model 0.968 /
   // 0.699 / 0.231 %); none of 66 decisions on the hand and the box static; static->dynamic 26 of 290.
+  // With the first map's probation and the handover of mapped movers: mean 0.138 %, 0 of 146 on the
+  // hand and the box static, static->dynamic 66 of 525 (the probation copies add decisions).
   // Limits ~1.2x.
   EXPECT_LE(mean(deviation["imm7-shadow"]), 0.5 * mean(deviation["imm7"]));
   EXPECT_LE(mean(deviation["imm7-shadow"]), mean(deviation["single"]));
   EXPECT_LT(mean(deviation["imm7-shadow"]), 0.0015);
   EXPECT_GE(pooled.trulyDynamic(), 55u);
   EXPECT_LE(pooled.movingAsStaticRate(), 0.01);
-  EXPECT_LE(pooled.staticAsDynamicRate(), 0.11);
+  EXPECT_LE(pooled.staticAsDynamicRate(), 0.151);
 }

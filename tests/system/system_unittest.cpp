@@ -211,8 +211,8 @@ TEST(SystemRealData, ExactGroundTruthAndLongRealRunAgreeWithTheirMeasurements)
                                 1e-4, 8));
     std::printf("synth19: ground truth leaves %zu of %zu features above 2 px, RMS %.2f px\n", st.featuresAbove,
                 st.nFeatures, st.rmsPx);
-    // Measured: 1 of 232 features above 2 px since the 1-point RANSAC is weighted by static evidence
-    // and first-map features go on probation (0 of 222 before; which of synth19's 48 moving points or
+    // Measured: 1 of 232 features above 2 px since first-map features go on probation and mapped
+    // movers are handed over (0 of 222 before; which of synth19's 48 moving points or
     // mismatches it is has not been established), RMS 0.44 px (0.40 before).
     EXPECT_LE(st.featuresAbove, 1u);
     EXPECT_LT(st.rmsPx, 0.53);
@@ -265,7 +265,7 @@ TEST(SystemOutputs, RefinedTrajectoryOnlyWhenAsked)
   std::printf("handheld 120 frames: filter %.3f %%, refined %.3f %% of path (%.2f s)\n", 100 * s.ate->rmseOverPath,
               100 * s.ateRefined->rmseOverPath, s.refineSeconds);
   EXPECT_LT(s.ateRefined->rmseOverPath, s.ate->rmseOverPath);
-  // Measured: filter 1.957 %, refined 0.451 % of path (0.370 % before the weighted 1-point RANSAC);
+  // Measured: filter 1.957 %, refined 0.451 % of path (0.370 % before the first map's probation);
   // limits ~1.2x.
   EXPECT_LT(s.ate->rmseOverPath, 0.0235);
   EXPECT_LT(s.ateRefined->rmseOverPath, 0.0054);

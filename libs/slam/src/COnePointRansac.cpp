@@ -3,7 +3,6 @@
 #include <immslam/slam/COnePointRansac.h>
 
 #include <Eigen/Cholesky>
-#include <algorithm>
 #include <cmath>
 
 namespace immslam::slam
@@ -29,12 +28,6 @@ void COnePointRansac::TOptions::validate(const std::string& s) const
 
 COnePointRansac::COnePointRansac() = default;
 
-double staticEvidence(const TFeature& f)
-{
-  const double age = std::min(1.0, static_cast<double>(f.nMatched) / kMatureMatches);
-  return 1.0 + age + (f.staticDecided ? 1.0 : 0.0);
-}
-
 std::vector<int> COnePointRansac::lowInnovationInliers(const camera::CCameraModel& cam, const VecX& x,
                                                        const std::function<MatX(int, int)>& covColumns,
                                                        const std::vector<TFeature>& features,
@@ -42,13 +35,10 @@ std::vector<int> COnePointRansac::lowInnovationInliers(const camera::CCameraMode
                                                        int* nHypotheses) const
 {
   std::vector<int> best;
-  double bestScore = 0;
   const int m = static_cast<int>(cands.size());
   if (nHypotheses) *nHypotheses = 0;
   if (m == 0) return best;
   const double thr2 = m_opts.inlier_threshold_px * m_opts.inlier_threshold_px;
-  double totalWeight = 0;
-  for (const auto& c : cands) totalWeight += c.weight;
   double nHyp = m_opts.max_hypotheses;
   std::uniform_int_distribution<int> pick(0, m - 1);
   std::vector<int> support;
@@ -64,24 +54,17 @@ std::vector<int> COnePointRansac::lowInnovationInliers(const camera::CCameraMode
     xh = x;
     xh.noalias() += PHt * c.S.ldlt().solve(c.z - c.h);
     support.clear();
-    double score = 0;
     for (int j = 0; j < m; ++j)
     {
       Vec2 uv;
       if (!predictMeasurement(cam, xh, features[cands[j].feature], uv)) continue;
-      if ((uv - cands[j].z).squaredNorm() < thr2)
-      {
-        support.push_back(j);
-        score += cands[j].weight;
-      }
+      if ((uv - cands[j].z).squaredNorm() < thr2) support.push_back(j);
     }
-    if (score > bestScore)
+    if (support.size() > best.size())
     {
       best = support;
-      bestScore = score;
-      // Adaptive number of hypotheses: n = log(1-p) / log(1 - eps), eps the best's share of the weight
-      // (the inlier ratio for equal weights).
-      const double eps = totalWeight > 0 ? bestScore / totalWeight : 1.0;
+      // Adaptive number of hypotheses: n = log(1-p) / log(1 - inlier ratio).
+      const double eps = static_cast<double>(best.size()) / m;
       nHyp = eps >= 1.0 ? 1.0 : std::log(1 - m_opts.success_probability) / std::log(1 - eps);
     }
   }

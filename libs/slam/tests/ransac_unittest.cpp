@@ -9,10 +9,6 @@
  *    documented adaptive count n_hyp = log(1 - p) / log(1 - eps) for the true inlier ratio eps, or
  *    the draw that first hit an inlier if that came later (computed from a copy of the random
  *    stream, by hand); with no outlier, exactly 1.
- *  - OnePointRansac.StaticEvidenceBeatsALargerRigidMover: 12 of 20 matches on a rigid mover (shifted
- *    together by 0.12 more than the world, 8-12 px), 8 on the static world: counted, the mover's
- *    consensus wins; weighted by staticEvidence() (the world's features old and decided static, the
- *    mover's young), the static world's exactly.
  *  - OnePointRansac.HighInnovationRescue: a match off its single-point prediction but on its
  *    epipolar line (depth unknown) is rescued; one 8 px off that line is rejected; the others are
  *    low-innovation inliers. */
@@ -53,7 +49,6 @@ struct TRansacProblem
   std::vector<TCandidate> cands;
   std::vector<int> inliers;  ///< the known answer, ascending
   double sigmaPixel = 0.2;
-  Vec3 shift = Vec3::Zero();  ///< the true common shift d
 
   TRansacProblem(int n, int nOutliers, unsigned seed)
   {
@@ -68,7 +63,6 @@ struct TRansacProblem
     for (int k = 0; k < n; ++k) B.block<2, 2>(13 + 3 * k, 0).setIdentity();
     P = 0.01 * B * B.transpose() + 1e-8 * MatX::Identity(dim, dim);
     const Vec3 d(0.1 * g(rng), 0.1 * g(rng), 0.0);
-    shift = d;
     // Which candidates are outliers: nOutliers distinct indices.
     std::vector<int> idx(n);
     for (int k = 0; k < n; ++k) idx[k] = k;
@@ -185,59 +179,6 @@ TEST(OnePointRansac, AdaptiveHypothesisCountFollowsTheFormula)
   int nHyp = 0;
   EXPECT_EQ(clean.run(ransac, rng, &nHyp), clean.inliers);
   EXPECT_EQ(nHyp, 1);
-}
-
-TEST(OnePointRansac, StaticEvidenceBeatsALargerRigidMover)
-{
-  const COnePointRansac ransac;
-  for (unsigned seed = 1; seed <= 40; ++seed)
-  {
-    TRansacProblem pb(20, 0, seed);
-    // Candidates 0-11 lie on a rigid mover: its points shifted by 0.12 more than the world's (8-12 px
-    // at depths 2-3, f = 200), with the same bounded noise. A hypothesis from one of them supports
-    // the 12 (within 1.1 px, as for the world) and none of the world's (>= 8 - 1.1 px off).
-    std::mt19937 noise(77 + seed);
-    std::uniform_real_distribution<double> U(-0.3, 0.3);
-    std::vector<int> mover, world;
-    for (int k = 0; k < 20; ++k)
-    {
-      if (k >= 12)
-      {
-        world.push_back(k);
-        continue;
-      }
-      mover.push_back(k);
-      Vec2 z;
-      ASSERT_TRUE(pb.cam->project(pb.x.segment<3>(13 + 3 * k) + pb.shift + Vec3(0.12, 0, 0), z));
-      pb.cands[k].z = z + Vec2(U(noise), U(noise));
-    }
-    std::mt19937 rng(3000 + seed);
-    int nHyp = 0;
-    // Equal weights: the largest consensus, the mover's.
-    EXPECT_EQ(pb.run(ransac, rng, &nHyp), mover) << "seed " << seed;
-    // Static evidence: the world's features matched for 100 frames and decided static (3 each, 24 in
-    // all), the mover's for 3 frames (1.1 each, 13.2 in all).
-    for (int k = 0; k < 20; ++k)
-    {
-      pb.feats[k].nMatched = k >= 12 ? 100 : 3;
-      pb.feats[k].staticDecided = k >= 12;
-      pb.cands[k].weight = staticEvidence(pb.feats[k]);
-    }
-    EXPECT_EQ(pb.run(ransac, rng, &nHyp), world) << "seed " << seed;
-  }
-}
-
-TEST(OnePointRansac, StaticEvidenceTerms)
-{
-  // w = 1 + min(1, n / 30) + s: each term alone.
-  TFeature f;
-  EXPECT_DOUBLE_EQ(staticEvidence(f), 1.0);  // new, undecided
-  f.nMatched = 15;
-  EXPECT_DOUBLE_EQ(staticEvidence(f), 1.5);
-  f.nMatched = 300;
-  EXPECT_DOUBLE_EQ(staticEvidence(f), 2.0);
-  f.staticDecided = true;
-  EXPECT_DOUBLE_EQ(staticEvidence(f), 3.0);
 }
 
 TEST(OnePointRansac, HighInnovationRescue)

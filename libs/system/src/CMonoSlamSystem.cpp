@@ -238,8 +238,6 @@ int CMonoSlamSystem::promoteFromShadow(const shadow::TShadowReport& srep, const 
   settleProbation(srep, promotions);
   if (holding) promotions.clear();
   retireWatched(promotions);
-  std::vector<std::int64_t> decidedStatic;
-  for (const auto& p : promotions) decidedStatic.push_back(p.id);
   // Without parallax nothing can be classified. While the IMM says the camera is not translating
   // (stationary and rotation families dominate), the SLAM takes the unresolved features it needs,
   // as the IMM paper's filter does with inverse depth; with translation, only when starving.
@@ -267,7 +265,6 @@ int CMonoSlamSystem::promoteFromShadow(const shadow::TShadowReport& srep, const 
     ids.push_back(p.id);
   }
   m_frame.promoted = countAdded(m_slam->addFeaturesAt(grey, uv, prior, ids));
-  m_slam->markStaticDecided(decidedStatic);
   int pendingVisible = 0;
   // Watched features do not count as SLAM's: they are not there for SLAM (watch_features).
   m_watchedVisible = 0;

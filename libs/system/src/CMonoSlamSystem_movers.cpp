@@ -107,20 +107,16 @@ void CMonoSlamSystem::settleProbation(const shadow::TShadowReport& srep, std::ve
       if (f.id == id) return &f;
     return nullptr;
   };
-  // A copy decided static: its SLAM feature stays, backed by the decision (not promoted twice).
-  std::vector<std::int64_t> confirmed;
+  // A copy decided static: its SLAM feature stays (the copy is not promoted twice).
   std::vector<shadow::TPromotion> kept;
   for (const auto& p : promotions)
   {
     const auto it = m_probation.find(p.id);
-    if (it != m_probation.end() && slamFeature(it->second))
-      confirmed.push_back(it->second);
-    else
+    if (it == m_probation.end() || !slamFeature(it->second))
       kept.push_back(p);  // (a copy whose feature SLAM deleted meanwhile enters as any promotion)
     if (it != m_probation.end()) m_probation.erase(it);
   }
   promotions = std::move(kept);
-  m_slam->markStaticDecided(confirmed);
   // Decided dynamic: a copy's SLAM feature leaves the map; the track starts with its mapped past.
   std::vector<std::int64_t> movers;
   for (const auto& d : srep.decisions)

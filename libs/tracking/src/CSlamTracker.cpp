@@ -158,14 +158,11 @@ void CSlamTracker::updateWithAll(const std::vector<TCandidate>& cands)
 void CSlamTracker::associateAndUpdate(std::vector<TCandidate>& cands)
 {
   auto t = Clock::now();
-  // Each match votes with its feature's static evidence (age, static decision): the consensus taken
-  // is the static world's even where a mover holds more matches.
   // Matches outside their ellipse (a feature that may have started to move) take no part.
   std::vector<TCandidate> gated;
   std::vector<int> gatedIndex;
   for (int c = 0; c < static_cast<int>(cands.size()); ++c)
   {
-    cands[c].weight = staticEvidence(m_filter.features()[cands[c].feature]);
     if (cands[c].outsideGate) continue;
     gated.push_back(cands[c]);
     gatedIndex.push_back(c);
@@ -202,13 +199,6 @@ void CSlamTracker::associateAndUpdate(std::vector<TCandidate>& cands)
   updateLostState();
   manageMap(true);
   m_report.tMapMs = msSince(t);
-}
-
-void CSlamTracker::markStaticDecided(const std::vector<std::int64_t>& ids)
-{
-  const std::unordered_set<std::int64_t> set(ids.begin(), ids.end());
-  for (int k = 0; k < static_cast<int>(m_filter.features().size()); ++k)
-    if (set.count(m_filter.features()[k].id)) m_filter.featureRecord(k).staticDecided = true;
 }
 
 void CSlamTracker::recordStatuses(const std::vector<TCandidate>& cands, const std::vector<char>& used,

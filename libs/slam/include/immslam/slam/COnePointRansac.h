@@ -28,28 +28,10 @@ struct TCandidate
   Vec2 h = Vec2::Zero();     ///< predicted pixel h(x_hat)
   Mat2F J_feat;
   Mat2 S = Mat2::Identity(); ///< innovation covariance at (x_hat, P_hat)
-  /** Static evidence of the feature (staticEvidence()): its vote in lowInnovationInliers(). Equal
-   * weights give the classic count of supporters. */
-  double weight = 1.0;
   /** Found only by the search for a feature that may have started to move, outside its 95 % ellipse
    * (CSlamTracker::searchFeatures): never used in an update, it counts as a rejection. */
   bool outsideGate = false;
 };
-
-/** Matches a map feature needs for full evidence of age in staticEvidence() (one second at 30 Hz). */
-constexpr int kMatureMatches = 30;
-
-/** The static evidence of a matched map feature, the weight of its vote in lowInnovationInliers():
- * \f$ w = 1 + \min(1, n_{matched} / 30) + s \f$, in [1, 3], with
- * - age in the map: \f$ n_{matched} \f$ the frames the feature was used in an update;
- * - a past static decision: s = 1 if the shadow filter decided the feature static
- *   (TFeature::staticDecided: a promotion, or a first-map feature confirmed), else 0.
- * A rigid mover holding more matches than the static world then loses to an older, confirmed static
- * world (doc/shadow.md, "Movers in the map"). Agreement with the bank's prediction is not a term:
- * the hypothesis' own support already measures it, and as a weight (the innovation's chi-square tail
- * under the fused prior) it moved visp_rbt's full-system ATE from 2.0 to 2.4 % of path (mean of four
- * starts) on a prediction that is over-confident on real video. */
-double staticEvidence(const TFeature& f);
 
 class COnePointRansac
 {
@@ -77,10 +59,6 @@ class COnePointRansac
 
   /** Low-innovation inliers: the candidates (indices) supporting the best of the adaptive number of
    * 1-point hypotheses \f$ x_i = \hat x + K_i (z_i - h_i(\hat x)) \f$, \f$ K_i = \hat P H_i^\top S_i^{-1} \f$.
-   * A hypothesis scores the summed TCandidate::weight of its supporters (their static evidence, not
-   * their count: equal weights give Civera et al.'s largest consensus); the adaptive number of
-   * hypotheses is \f$ \log(1-p) / \log(1-\epsilon) \f$ with \f$ \epsilon \f$ the best score's share of
-   * the total weight (the inlier ratio for equal weights).
    * \param nHypotheses optional output: hypotheses tried. */
   /** \param covColumns returns the columns [off, off+len) of the (fused) predicted covariance. */
   std::vector<int> lowInnovationInliers(const camera::CCameraModel& cam, const VecX& x,

@@ -36,9 +36,6 @@ struct TFeature
   std::int64_t lastSeenFrame = 0;  ///< last frame it was predicted inside the image
   int rejectedInRow = 0;      ///< consecutive frames it was found but rejected as an outlier
   std::int64_t lastFoundFrame = -1;  ///< last frame its search found a match (used or rejected)
-  /** A static decision of the shadow filter backs it (promoted static, or a first-map feature the
-   * shadow filter confirmed): static evidence for 1-point RANSAC (staticEvidence()). */
-  bool staticDecided = false;
   double tLastInlier = 0;             ///< timestamp of the last frame its measurement was used
   Vec2 uvLastInlier = Vec2::Zero();   ///< the pixel measured then
 

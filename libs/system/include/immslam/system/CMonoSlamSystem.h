@@ -185,7 +185,7 @@ class CMonoSlamSystem
   /** Probation of a first map (features put straight into SLAM, nothing to classify them against):
    * a copy of each goes to the shadow filter at its pixel. */
   void startProbation(const cv::Mat& grey, const std::vector<std::int64_t>& slamIds);
-  /** The copies' decisions: static marks the SLAM feature staticDecided (the copy is not promoted),
+  /** The copies' decisions: static keeps the SLAM feature (the copy is not promoted),
    * dynamic removes the SLAM feature (its mapped past goes to the copy's track). Also forgets the
    * mapped past of tracks that left the shadow filter and emits that of tracks decided dynamic. */
   void settleProbation(const shadow::TShadowReport& srep, std::vector<shadow::TPromotion>& promotions);

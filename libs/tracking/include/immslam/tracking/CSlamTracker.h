@@ -172,9 +172,6 @@ class CSlamTracker
   std::int64_t allocateId() { return m_filter.allocateId(); }
   /** Removes features by id from every mode (e.g. caught moving). */
   void removeFeatures(const std::vector<std::int64_t>& ids);
-  /** Records that a static decision backs these features (TFeature::staticDecided: static evidence in
-   * 1-point RANSAC, staticEvidence()); unknown ids are ignored. */
-  void markStaticDecided(const std::vector<std::int64_t>& ids);
 
   /** The estimator. */
   const CImmSlamFilter& filter() const { return m_filter; }
