@@ -4,6 +4,7 @@
 #include <immslam/tracking/CSlamTracker.h>
 
 #include <opencv2/core.hpp>
+#include <algorithm>
 #include <numeric>
 #include <sstream>
 #include <unordered_set>
@@ -158,10 +159,13 @@ void CSlamTracker::updateWithAll(const std::vector<TCandidate>& cands)
 void CSlamTracker::associateAndUpdate(std::vector<TCandidate>& cands)
 {
   auto t = Clock::now();
-  // Matches outside their ellipse (a feature that may have started to move) take no part.
+  // Matches outside their ellipse (a feature that may have started to move) take no part; the
+  // candidates are copied only in the frames that have such a match.
+  const bool anyOutside =
+      std::any_of(cands.begin(), cands.end(), [](const TCandidate& c) { return c.outsideGate; });
   std::vector<TCandidate> gated;
   std::vector<int> gatedIndex;
-  for (int c = 0; c < static_cast<int>(cands.size()); ++c)
+  for (int c = 0; anyOutside && c < static_cast<int>(cands.size()); ++c)
   {
     if (cands[c].outsideGate) continue;
     gated.push_back(cands[c]);
@@ -169,8 +173,9 @@ void CSlamTracker::associateAndUpdate(std::vector<TCandidate>& cands)
   }
   std::vector<int> low = m_ransac.lowInnovationInliers(
       m_filter.camera(), m_filter.predictedMean(), [this](int off, int len) { return m_filter.predictedCovColumns(off, len); },
-      m_filter.features(), gated, m_rng, &m_report.nHypotheses);
-  for (int& c : low) c = gatedIndex[c];
+      m_filter.features(), anyOutside ? gated : cands, m_rng, &m_report.nHypotheses);
+  if (anyOutside)
+    for (int& c : low) c = gatedIndex[c];
   m_report.tRansacMs = msSince(t);
 
   t = Clock::now();
