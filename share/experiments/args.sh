@@ -81,7 +81,7 @@ args_parse() {
         shift
         continue ;;
     esac
-    [ $# -ge 2 ] || args_die "option '$opt' needs a value"
+    [ $# -ge 2 ] && [[ $2 != -* ]] || args_die "option '$opt' needs a value"
     value=$2
     shift 2
     case $opt in

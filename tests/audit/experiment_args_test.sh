@@ -42,6 +42,7 @@ check help "The probe's header.
 Second line." "$(probe --help)"
 check "unknown option" "probe.sh: unknown option '--sedes'; see probe.sh --help" "$(probe --sedes 3)"
 check "missing value" "probe.sh: option '--out' needs a value; see probe.sh --help" "$(probe --out)"
+check "an option as value" "probe.sh: option '--out' needs a value; see probe.sh --help" "$(probe --out --seeds 3)"
 check "bad seeds" "probe.sh: --seeds: 'x' in '1,x' is neither a seed nor a range FIRST-LAST (FIRST <= LAST); see probe.sh --help" \
   "$(probe --seeds 1,x)"
 check "reversed range" 2 "$(probe --seeds 9-3 > /dev/null 2>&1; echo $?)"
