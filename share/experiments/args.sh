@@ -11,7 +11,7 @@
 #   --build DIR   the build folder with bin/ (default build)
 #   --out DIR     where renders and runs go (default /tmp/<script name>)
 #   --seeds LIST  render seeds: a range 101-140, a list 7,11,23, or both 1-5,9 (default: the script's)
-#   --data DIR    the shared data sets (default ../shared/data)
+#   --data DIR    the shared data sets (default $IMMSLAM_SHARED_DATA_DIR, else ../shared/data)
 #   -h, --help    the script's header comment
 # Relative folders are relative to the repository root (the scripts run from there).
 # Bad input (an unknown option, a missing value, a malformed seed list, an extra argument) stops the
@@ -20,7 +20,7 @@
 ARGS_SCRIPT=$(basename "$0")
 BUILD=build
 OUT=/tmp/${ARGS_SCRIPT%.sh}
-DATA=../shared/data
+DATA=${IMMSLAM_SHARED_DATA_DIR:-../shared/data}
 SEEDS=()
 ARGS_NPOS=0
 ARGS_POS_NAMES=

@@ -8,7 +8,7 @@
 # the full system's static/dynamic decisions scored against the masks; and the paper's Fig. 5(a)
 # baseline, the IMM with the objects' features disabled ([input] exclusion_masks = the masks).
 # Usage: share/experiments/composite-real.sh [--build DIR] [--out DIR] [--data DIR]
-#        (defaults: build, /tmp/composite-real, ../shared/data; share/experiments/args.sh)
+#        (defaults: build, /tmp/composite-real, $IMMSLAM_SHARED_DATA_DIR or ../shared/data; share/experiments/args.sh)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 source share/experiments/args.sh

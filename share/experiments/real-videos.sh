@@ -16,7 +16,7 @@
 # and turning about 1 degree (its wall marks shift by <= 10 px): the largest rotation of each config's
 # estimate, and the shadow filter's decisions (no masks: the video is not still). Not solved.
 # Usage: share/experiments/real-videos.sh [--build DIR] [--out DIR] [--data DIR] [--opencv-doc DIR]
-#        (defaults: build, /tmp/real-videos, ../shared/data, /usr/share/doc/opencv-doc;
+#        (defaults: build, /tmp/real-videos, $IMMSLAM_SHARED_DATA_DIR or ../shared/data, /usr/share/doc/opencv-doc;
 #        apt-get install opencv-doc; share/experiments/args.sh)
 #        EXTRA_SET="--set system.watch_features=10" adds options to every imm-monoslam run.
 set -euo pipefail

@@ -16,7 +16,6 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 source share/experiments/args.sh
 mapfile -t SEEDS < <(seq 101 120)
-DATA=${IMMSLAM_SHARED_DATA_DIR:-../shared/data}
 args_parse "$@"
 CONFIG=${CONFIG:-ini/imm7-shadow.ini}
 read -r -a EXTRA <<< "${SET:-}"

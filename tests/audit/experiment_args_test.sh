@@ -30,9 +30,10 @@ args_parse "\$@"
 echo "\$BUILD|\$OUT|\$DATA|\${SEEDS[*]}|\$DOC"
 EOF
 chmod +x "$tmp/probe.sh"
-probe() { "$tmp/probe.sh" "$@" 2>&1; }
+probe() { env -u IMMSLAM_SHARED_DATA_DIR "$tmp/probe.sh" "$@" 2>&1; }
 
 check defaults "build|/tmp/probe|../shared/data|7 11|none" "$(probe)"
+check "data from the environment" "/d" "$(IMMSLAM_SHARED_DATA_DIR=/d "$tmp/probe.sh" | cut -d'|' -f3)"
 check options "b|o|d|3|x" "$(probe --build b --out o --data d --seeds 3 --opencv-doc x)"
 check "--name=value" "b|o|d|3|x" "$(probe --build=b --out=o --data=d --seeds=3 --opencv-doc=x)"
 check "seed range" "101 102 103 104" "$(probe --seeds 101-104 | cut -d'|' -f4)"
