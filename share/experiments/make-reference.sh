@@ -2,26 +2,43 @@
 # A reference trajectory for a real sequence that has no usable ground truth: a COLMAP reconstruction of
 # its images (Debian's colmap: SIFT features, sequential matching, incremental mapping and bundle
 # adjustment), written as TUM (T_world_camera, the sequence's timestamps) for slam-eval.
-#   share/experiments/make-reference.sh DATASET_FOLDER OUT_FOLDER [CAMERA_MODEL] [CAMERA_PARAMS]
-# DATASET_FOLDER: rgb.txt + images (../shared/data/README.md). CAMERA_MODEL/PARAMS: COLMAP's (default
-# from calib.txt: pinhole -> PINHOLE fx,fy,cx,cy held fixed; davison -> RADIAL f,cx,cy,k1,k2 refined,
-# started from k1 = -kd1 f^2, the first-order match of Davison's model). Writes OUT/reference.txt,
-# OUT/reference_stats.txt (registered images, points, mean reprojection error) and keeps COLMAP's
-# database and model in OUT. Needs: apt-get install colmap. Nothing is written into the repository.
+# Usage: share/experiments/make-reference.sh DATASET_FOLDER [--out DIR] [--camera-model NAME --camera-params LIST]
+#        (default --out /tmp/make-reference; relative folders from the repository root;
+#        share/experiments/args.sh)
+# DATASET_FOLDER: rgb.txt + images (../shared/data/README.md). --camera-model/--camera-params: COLMAP's
+# (default from calib.txt: pinhole -> PINHOLE fx,fy,cx,cy held fixed; davison -> RADIAL f,cx,cy,k1,k2
+# refined, started from k1 = -kd1 f^2, the first-order match of Davison's model). Writes
+# OUT/reference.txt, OUT/reference_stats.txt (registered images, points, mean reprojection error) and
+# keeps COLMAP's database and model in OUT. Needs: apt-get install colmap. Nothing is written into the
+# repository. Environment: THREADS (default 2), OVERLAP (sequential matching, default 15),
+# SKIP_MATCHING=1 (reuse OUT/database.db).
 set -euo pipefail
-DATA=$(cd "$1" && pwd); OUT=$2; mkdir -p "$OUT"; OUT=$(cd "$OUT" && pwd)
-read -r MODEL W H FX FY CX CY K1 < <(grep -v '^#' "$DATA/calib.txt" | head -1) || true
-CAM_MODEL=${3:-}; CAM_PARAMS=${4:-}; REFINE=0
+cd "$(dirname "$0")/../.."
+source share/experiments/args.sh
+ARGS_COMMON="--out"
+ARGS_NEEDS_BUILD=0
+ARGS_NPOS=1 ARGS_POS_NAMES=DATASET_FOLDER
+CAM_MODEL=''; CAM_PARAMS=''
+args_option --camera-model CAM_MODEL
+args_option --camera-params CAM_PARAMS
+args_parse "$@"
+[ -f "${POS[0]}/rgb.txt" ] || args_die "dataset folder '${POS[0]}' has no rgb.txt"
+SEQ=$(cd "${POS[0]}" && pwd); mkdir -p "$OUT"; OUT=$(cd "$OUT" && pwd)
+read -r MODEL W H FX FY CX CY K1 < <(grep -v '^#' "$SEQ/calib.txt" | head -1) || true
+REFINE=0
+if [[ -n "$CAM_MODEL" && -z "$CAM_PARAMS" ]]; then
+  args_die "--camera-model $CAM_MODEL needs --camera-params"
+fi
 if [[ -z "$CAM_MODEL" ]]; then
   case "$MODEL" in
     pinhole) CAM_MODEL=PINHOLE; CAM_PARAMS="$FX,$FY,$CX,$CY" ;;
     davison) CAM_MODEL=RADIAL; CAM_PARAMS="$FX,$CX,$CY,$(python3 -c "print(-$K1*$FX*$FX)"),0"; REFINE=1 ;;
-    *) echo "make-reference: calib model '$MODEL' needs CAMERA_MODEL and CAMERA_PARAMS" >&2; exit 2 ;;
+    *) args_die "calib model '$MODEL' of $SEQ/calib.txt needs --camera-model and --camera-params" ;;
   esac
 fi
 # Images listed in rgb.txt, in order (COLMAP reads a folder: link them under their own names).
 mkdir -p "$OUT/images"
-grep -v '^#' "$DATA/rgb.txt" | while read -r ts f; do ln -sf "$DATA/$f" "$OUT/images/$(basename "$f")"; done
+grep -v '^#' "$SEQ/rgb.txt" | while read -r ts f; do ln -sf "$SEQ/$f" "$OUT/images/$(basename "$f")"; done
 THREADS=${THREADS:-2}
 if [[ "${SKIP_MATCHING:-0}" != 1 ]]; then
 rm -f "$OUT/database.db"
@@ -43,7 +60,7 @@ for d in "$OUT"/sparse/*/; do
   if (( n > BEST )); then BEST=$n; MODEL_DIR=${d%/}; fi
 done
 [[ -n "$MODEL_DIR" ]] || { echo "make-reference: COLMAP made no model (see $OUT/colmap.log)" >&2; exit 1; }
-python3 - "$DATA/rgb.txt" "$MODEL_DIR" "$OUT" <<'PY'
+python3 - "$SEQ/rgb.txt" "$MODEL_DIR" "$OUT" <<'PY'
 import sys, math
 rgb, model, out = sys.argv[1:4]
 stamp = {}

@@ -1,6 +1,6 @@
 /* imm-monoslam — prototype kernels measured against the library's (part of bench_filter).
  *
- * These are NOT used by the library: they quantify the speed-ups proposed in doc/performance.md
+ * These are NOT used by the library: they quantify the speed-ups recorded in doc/experiments/performance.md
  * on the same data as the library's kernels, and check that they give the same numbers (counter
  * `max_abs_diff` against the library's result). A prototype that was adopted stays here as the
  * record of the comparison.

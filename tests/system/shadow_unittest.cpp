@@ -168,7 +168,7 @@ TEST(ShadowSystem, RenderedMovingObjectsDoNotCorruptTheMap)
 
 TEST(ShadowSystem, MovingObjectsOverFiveSeeds)
 {
-  // Fig. 5 of paper 2 as numbers, the seeds of share/scripts/moving-objects-ate.sh: the full system on
+  // Fig. 5 of paper 2 as numbers, the seeds of share/experiments/moving-objects-ate.sh: the full system on
   // the hand-held path with moving boxes, and on the same path (same seed) without them; for the
   // filter's trajectory and for the offline refinement of the run's own matches
   // ([output] refine_trajectory: the shadow filter kept the boxes' measurements out of them).
@@ -279,7 +279,7 @@ TEST(ShadowSystem, ExclusionMasksDisableTheMovingObjectsAsInFig5a)
 TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
 {
   // Real camera motion, background, noise and blur; moving objects cut from another real sequence
-  // pasted in with imm-composite, their masks the truth (share/scripts/composite-real.sh, doc/shadow.md).
+  // pasted in with imm-composite, their masks the truth (share/experiments/composite-real.sh, doc/shadow.md).
   // Single runs of one composite are fragile (a 2 % change of the object's size can turn a 0.1 %
   // deviation into 2 %), so each sequence is tested over five small variations of the object's path
   // and size: pooled decisions, mean (testseq, against the IMM without shadow filter on the same
@@ -489,7 +489,7 @@ TEST(ShadowSystem, RealVideoOfAHandMovingABoxInFrontOfAStillCamera)
   // opencv-doc's box.mp4: a hand moves a textured box (a fifth to a third of the image) in front of a
   // camera on a tripod (checked: background patches stay within 1 px over the whole video), the box
   // in view from the first frame. Truth: the camera is at rest; masks/ mark what moves
-  // (share/scripts/real-videos.sh and doc/shadow.md give every config's figures).
+  // (share/experiments/real-videos.sh and doc/shadow.md give every config's figures).
   const std::string doc = opencvDocDir();
   if (doc.empty()) GTEST_SKIP() << "opencv-doc is not installed (apt-get install opencv-doc)";
   const std::string video = outDir("realvideo_box_src") + ".mp4";

@@ -7,7 +7,7 @@
 # rotation is known, and masks/ mark what moves. Per run: rotation RMSE (no alignment), the largest
 # camera displacement relative to the median distance of the map's features (the estimate should not
 # translate: scale-free), motion segmentation accuracy against motion_labels.txt, and the shadow
-# filter's decisions against the masks. With ../shared/data/monoslam_testseq, also the hand and the box
+# filter's decisions against the masks. With DATA/monoslam_testseq, also the hand and the box
 # of box.mp4 pasted into that real hand-held video (a real hand in front of a real moving camera).
 # The calibrations are guesses (the videos come without one): f = 560 px for box.mp4 (a 60-degree
 # webcam), f = 700 px for vtest.avi; imm-rotate uses the same model to make the rotation, so the
@@ -15,19 +15,22 @@
 # Last, cup.mp4 (opencv4/html/cup.mp4.gz): a hand holding a cup before a bare wall, the camera hand-held
 # and turning about 1 degree (its wall marks shift by <= 10 px): the largest rotation of each config's
 # estimate, and the shadow filter's decisions (no masks: the video is not still). Not solved.
-# Usage: share/scripts/real-videos.sh [BUILD_DIR] [OUT_DIR] [OPENCV_DOC_DIR]
+# Usage: share/experiments/real-videos.sh [--build DIR] [--out DIR] [--data DIR] [--opencv-doc DIR]
+#        (defaults: build, /tmp/real-videos, $IMMSLAM_SHARED_DATA_DIR or ../shared/data, /usr/share/doc/opencv-doc;
+#        apt-get install opencv-doc; share/experiments/args.sh)
 #        EXTRA_SET="--set system.watch_features=10" adds options to every imm-monoslam run.
-#        (default build, /tmp/real-videos, /usr/share/doc/opencv-doc; apt-get install opencv-doc)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+source share/experiments/args.sh
+ARGS_COMMON="--build --out --data"
+DOC=/usr/share/doc/opencv-doc
+args_option --opencv-doc DOC
+args_parse "$@"
 read -r -a EXTRA <<< "${EXTRA_SET:-}"
-BUILD=${1:-build}
-OUT=${2:-/tmp/real-videos}
-DOC=${3:-/usr/share/doc/opencv-doc}
 VTEST="$DOC/examples/data/vtest.avi"
 BOXGZ="$DOC/opencv4/html/box.mp4.gz"
 for f in "$VTEST" "$BOXGZ"; do
-  [ -f "$f" ] || { echo "real-videos: $f not found (apt-get install opencv-doc, or give its folder)" >&2; exit 1; }
+  [ -f "$f" ] || { echo "real-videos: $f not found (apt-get install opencv-doc, or give its folder: --opencv-doc)" >&2; exit 1; }
 done
 mkdir -p "$OUT"
 [ -f "$OUT/box.mp4" ] || gzip -dc "$BOXGZ" > "$OUT/box.mp4"
@@ -72,7 +75,7 @@ done
 # A real hand in front of a real moving camera: what moves in box.mp4 (cut out by box-still's masks)
 # pasted into monoslam_testseq (a hand-held camera) with imm-composite, five placements; deviation of
 # each config from the full system's run on the clean sequence (% of path), decisions against the masks.
-TS=../shared/data/monoslam_testseq
+TS=$DATA/monoslam_testseq
 if [ -d "$TS" ]; then
   clean="$OUT/out-testseq-clean"
   "$BUILD/bin/imm-monoslam" ini/imm7-shadow.ini "$TS" --out "$clean" --no-gui --quiet "${EXTRA[@]}" > /dev/null

@@ -8,14 +8,15 @@
 # run's own matches) without and with the objects. Last two: the paper's Fig. 5(a) baseline, the moving
 # objects' features disabled ([input] exclusion_masks = the renderer's masks: no feature starts and no
 # match is accepted on them), for the IMM without shadow filter and for the full system.
-# Usage: share/scripts/moving-objects-ate.sh [BUILD_DIR] [OUT_DIR] [SEED...]   (default build, /tmp/moving-ate, 7 11 23 42 101)
+# Usage: share/experiments/moving-objects-ate.sh [--build DIR] [--out DIR] [--seeds LIST]
+#        (defaults: build, /tmp/moving-ate, 7,11,23,42,101; LIST as 101-140 or 7,11,23; share/experiments/args.sh)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-BUILD=${1:-build}
-OUT=${2:-/tmp/moving-ate}
-shift $(( $# > 2 ? 2 : $# )) || true
-SEEDS=("$@")
-[ ${#SEEDS[@]} -eq 0 ] && SEEDS=(7 11 23 42 101)
+source share/experiments/args.sh
+ARGS_COMMON="--build --out --seeds"
+OUT=/tmp/moving-ate
+SEEDS=(7 11 23 42 101)
+args_parse "$@"
 mkdir -p "$OUT"
 ate() { "$BUILD/bin/imm-monoslam" "$1" "$2" --out "$3" --no-gui --quiet "${@:4}" | grep -o '= [0-9.]* % of path' | head -n 1 | tr -dc '0-9.'; }
 COLUMNS_=(full/no-objects full/objects ratio imm7/objects single/objects full/still-boxes refined/no-objects

@@ -8,19 +8,17 @@
 #   hold-out seeds    ini/scenarios/holdout/pause-pan-movers.ini rendered without its moving objects
 #                     (a static world), against the renderer's truth, % of path.
 # Also the smoother's lag and CPU share, and the filter's median frame time of each run.
-# Usage: share/scripts/smoother-eval.sh [BUILD_DIR] [OUT_DIR] [SEED...]
-#        (default build, /tmp/smoother-eval, seeds 101..120)
+# Usage: share/experiments/smoother-eval.sh [--build DIR] [--out DIR] [--seeds LIST] [--data DIR]
+#        (defaults: build, /tmp/smoother-eval, 101-120, $IMMSLAM_SHARED_DATA_DIR or ../shared/data;
+#        LIST as 101-140 or 7,11,23; share/experiments/args.sh)
 # Environment: CONFIG (default ini/imm7-shadow.ini), SET (extra imm-monoslam options).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-BUILD=${1:-build}
-OUT=${2:-/tmp/smoother-eval}
-shift $(( $# > 2 ? 2 : $# )) || true
-SEEDS=("$@")
-[ ${#SEEDS[@]} -eq 0 ] && mapfile -t SEEDS < <(seq 101 120)
+source share/experiments/args.sh
+mapfile -t SEEDS < <(seq 101 120)
+args_parse "$@"
 CONFIG=${CONFIG:-ini/imm7-shadow.ini}
 read -r -a EXTRA <<< "${SET:-}"
-DATA=${IMMSLAM_SHARED_DATA_DIR:-../shared/data}
 APP=$BUILD/bin/imm-monoslam
 EVAL=$BUILD/bin/slam-eval
 mkdir -p "$OUT"

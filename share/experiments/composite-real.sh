@@ -7,13 +7,13 @@
 # deviation from the full system's run on the clean sequence (both as % of path after Sim(3)); and
 # the full system's static/dynamic decisions scored against the masks; and the paper's Fig. 5(a)
 # baseline, the IMM with the objects' features disabled ([input] exclusion_masks = the masks).
-# Usage: share/scripts/composite-real.sh [BUILD_DIR] [OUT_DIR] [DATA_DIR]
-#        (defaults: build, /tmp/composite-real, ../shared/data)
+# Usage: share/experiments/composite-real.sh [--build DIR] [--out DIR] [--data DIR]
+#        (defaults: build, /tmp/composite-real, $IMMSLAM_SHARED_DATA_DIR or ../shared/data; share/experiments/args.sh)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-BUILD=${1:-build}
-OUT=${2:-/tmp/composite-real}
-DATA=${3:-../shared/data}
+source share/experiments/args.sh
+ARGS_COMMON="--build --out --data"
+args_parse "$@"
 for d in monoslam_testseq visp_rbt; do
   [ -d "$DATA/$d" ] || { echo "composite-real.sh: $DATA/$d not found (skipped)"; exit 0; }
 done

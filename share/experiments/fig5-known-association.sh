@@ -7,14 +7,15 @@
 #   imm7-shadow.ini;
 #   the system's own protocol (gate, RANSAC, deletion, handovers): imm7-shadow.ini (the full system).
 # The last line gives the means and the ratios all/static.
-# Usage: share/scripts/fig5-known-association.sh [BUILD_DIR] [OUT_DIR] [SEED...]   (default build, /tmp/fig5-ka, 7 11 23 42 101)
+# Usage: share/experiments/fig5-known-association.sh [--build DIR] [--out DIR] [--seeds LIST]
+#        (defaults: build, /tmp/fig5-ka, 7,11,23,42,101; LIST as 101-140 or 7,11,23; share/experiments/args.sh)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-BUILD=${1:-build}
-OUT=${2:-/tmp/fig5-ka}
-shift $(( $# > 2 ? 2 : $# )) || true
-SEEDS=("$@")
-[ ${#SEEDS[@]} -eq 0 ] && SEEDS=(7 11 23 42 101)
+source share/experiments/args.sh
+ARGS_COMMON="--build --out --seeds"
+OUT=/tmp/fig5-ka
+SEEDS=(7 11 23 42 101)
+args_parse "$@"
 mkdir -p "$OUT"
 PAPER=(--set input.known_association_robust=false --set input.known_association_first_map=static --set system.starved_below=0)
 run() {  # run NAME CONFIG DATA KINDS [args...]

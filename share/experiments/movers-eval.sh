@@ -4,20 +4,20 @@
 # moving -> static, counts), its ATE (% of path) with the objects and on the same path and world
 # without them ([objects] enabled = false), and the IMM without the shadow filter in that static
 # world; then the totals and means.
-# Usage: share/scripts/movers-eval.sh SCENARIO.ini [BUILD_DIR] [OUT_DIR] [SEED...]
-#        (default build, /tmp/movers-eval, seeds 101..140)
+# Usage: share/experiments/movers-eval.sh SCENARIO.ini [--build DIR] [--out DIR] [--seeds LIST]
+#        (defaults: build, /tmp/movers-eval, 101-140; LIST as 101-140 or 7,11,23; share/experiments/args.sh)
 # Environment: CONFIG (default ini/imm7-shadow.ini), BASE_CONFIG (default ini/imm7.ini), SET (extra
 #   imm-monoslam options for both, e.g. "--set system.watch_features=10"), APP (the imm-monoslam to run,
 #   default BUILD_DIR/bin/imm-monoslam: another build on the same renders).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-[ $# -ge 1 ] || { sed -n '2,10p' "$0"; exit 2; }
-SCEN=$1
-BUILD=${2:-build}
-OUT=${3:-/tmp/movers-eval}
-shift $(( $# > 3 ? 3 : $# )) || true
-SEEDS=("$@")
-[ ${#SEEDS[@]} -eq 0 ] && mapfile -t SEEDS < <(seq 101 140)
+source share/experiments/args.sh
+ARGS_COMMON="--build --out --seeds"
+ARGS_NPOS=1 ARGS_POS_NAMES=SCENARIO.ini
+mapfile -t SEEDS < <(seq 101 140)
+args_parse "$@"
+SCEN=${POS[0]}
+[ -f "$SCEN" ] || args_die "scenario '$SCEN' not found"
 CONFIG=${CONFIG:-ini/imm7-shadow.ini}
 BASE_CONFIG=${BASE_CONFIG:-ini/imm7.ini}
 read -r -a EXTRA <<< "${SET:-}"
