@@ -329,7 +329,31 @@ double CRayClassifier::detectionProbability(const TRayTrack& track, const TRayTe
   return sum / static_cast<double>(m_directions.size());
 }
 
-EShadowClass CRayClassifier::classify(TRayTrack& track, TDecision* info, TRayTestResult* result) const
+double CRayClassifier::mapScale(const TRayTrack& track, const TRayTestResult& r, const CMapViews& map) const
+{
+  constexpr std::size_t kMaxMapFeatures = 8, kMinMapFeatures = 5;
+  constexpr double kMedianChi2_3 = 2.365973884375;  // median of chi-square with 3 dof
+  const TRayView* v[3] = {&track.views[static_cast<std::size_t>(r.viewIndex[0])],
+                          &track.views[static_cast<std::size_t>(r.viewIndex[1])],
+                          &track.views[static_cast<std::size_t>(r.viewIndex[2])]};
+  const auto pixels = map.common({v[0]->frame, v[1]->frame, v[2]->frame}, kMaxMapFeatures);
+  if (pixels.size() < kMinMapFeatures) return 1.0;
+  std::vector<double> T;
+  TRayTrack ref;
+  ref.views = {*v[0], *v[1], *v[2]};
+  for (const auto& uv : pixels)
+  {
+    for (int j = 0; j < 3; ++j) ref.views[static_cast<std::size_t>(j)].uv = uv[static_cast<std::size_t>(j)];
+    const TRayTestResult rr = test(ref);
+    if (rr.evaluated && std::isfinite(rr.test.test.T)) T.push_back(rr.test.test.T);
+  }
+  if (T.size() < kMinMapFeatures) return 1.0;
+  std::nth_element(T.begin(), T.begin() + static_cast<std::ptrdiff_t>(T.size() / 2), T.end());
+  return std::max(1.0, T[T.size() / 2] / kMedianChi2_3);
+}
+
+EShadowClass CRayClassifier::classify(TRayTrack& track, TDecision* info, TRayTestResult* result,
+                                      const CMapViews* map) const
 {
   if (track.views.size() < 3 || track.views.back().frame != track.frame ||
       track.elapsed < m_p.minTestFrames)
@@ -346,9 +370,13 @@ EShadowClass CRayClassifier::classify(TRayTrack& track, TDecision* info, TRayTes
   // The depth-free test speaks for a camera that does not translate (weight pi_nt, see the class
   // comment); a translating camera is the three-ray test's, as in MonoSLAMBOT.
   const bool depthFreeActive = d.evaluated && track.notTranslating >= 0.5;
+  // A rejection must also stand against the map: the same test of the map's static points over the
+  // same three frames sees the same relative-motion error (mapScale).
+  bool raysRejected = r.evaluated && r.test.test.rejected();
+  if (raysRejected && map) raysRejected = r.test.test.T > mapScale(track, r, *map) * r.test.test.threshold;
   if (r.evaluated || depthFreeActive)
   {
-    const bool rejected = (r.evaluated && r.test.test.rejected()) || (depthFreeActive && d.rejected);
+    const bool rejected = raysRejected || (depthFreeActive && d.rejected);
     ++track.evaluations;
     track.rejections += rejected ? 1 : 0;
     track.recent.push_back(rejected ? 1 : 0);

@@ -209,7 +209,7 @@ void CShadowFilter::classifyAndManage()
     {
       TDecision info;
       TRayTestResult r;
-      const EShadowClass c = m_classifier.classify(f.track, &info, &r);
+      const EShadowClass c = m_classifier.classify(f.track, &info, &r, m_map.empty() ? nullptr : &m_map);
       if (c != EShadowClass::Pending)
       {
         info.id = f.id;

@@ -21,6 +21,16 @@ int countAdded(const std::vector<std::int64_t>& ids)
 {
   return static_cast<int>(std::count_if(ids.begin(), ids.end(), [](std::int64_t id) { return id >= 0; }));
 }
+/** The SLAM filter's inliers of a frame (id, measured pixel): points the static world's consensus holds. */
+std::vector<std::pair<std::int64_t, Vec2>> mapInliers(const slam::TFrameReport& rep)
+{
+  std::vector<std::pair<std::int64_t, Vec2>> z;
+  for (const auto& s : rep.searches)
+    if (s.status == slam::TSearchRecord::EStatus::LowInnovationInlier ||
+        s.status == slam::TSearchRecord::EStatus::RescuedInlier)
+      z.emplace_back(s.id, s.z);
+  return z;
+}
 /** Memory of the automatic pending weight: outcome counts decay by this factor per frame (~100 frames). */
 constexpr double kOutcomeDecay = 0.99;
 /** The new tracks `fresh` farthest from every feature held (`avoid`), one at a time (as corners
@@ -309,6 +319,7 @@ const TSystemFrame& CMonoSlamSystem::processFrame(double timestamp, const cv::Ma
     if (m_shadow)
     {
       const auto ts = Clock::now();
+      m_shadow->observeMap(rep.frame, mapInliers(rep));
       const auto& srep = m_shadow->processFrame(cameraMotion(timestamp, rep.dtFrames), grey, excluded);
       m_frame.shadow = &srep;
       pendingVisible = promoteFromShadow(srep, grey, holding, slamInView);
@@ -386,6 +397,7 @@ const TSystemFrame& CMonoSlamSystem::processMeasurements(double timestamp,
   if (m_shadow && rep.frame > 0)
   {
     const auto ts = Clock::now();
+    m_shadow->observeMap(rep.frame, mapInliers(rep));
     const auto& srep = m_shadow->processMeasurements(cameraMotion(timestamp, rep.dtFrames), zShadow);
     m_frame.shadow = &srep;
     pendingVisible = promoteFromShadow(srep, cv::Mat(), holding, slamInView);

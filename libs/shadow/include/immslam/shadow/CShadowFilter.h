@@ -178,6 +178,10 @@ class CShadowFilter
   /** Removes features by id (e.g. matched by the caller to something else). */
   void removeFeatures(const std::vector<std::int64_t>& ids);
 
+  /** The SLAM map's measurements of frame `frame` (its inliers: id, pixel), given before that frame's
+   * processFrame/processMeasurements: the reference of the three-ray test (CRayClassifier::mapScale). */
+  void observeMap(std::int64_t frame, std::vector<std::pair<std::int64_t, Vec2>> z) { m_map.add(frame, std::move(z)); }
+
   /** The report of the last processed frame. */
   const TShadowReport& lastReport() const { return m_report; }
   /** The options in use (validated). */
@@ -207,6 +211,7 @@ class CShadowFilter
   TCameraMotion m_motion;  ///< the current frame's motion
   bool m_started = false;
   TShadowReport m_report;
+  CMapViews m_map;  ///< the SLAM map's recent measurements (observeMap)
   double m_sigmaV = 0, m_sigmaA = 0;  ///< in length units per frame (per frame^2)
   std::chrono::steady_clock::time_point m_t0;  ///< start of the current frame
 };

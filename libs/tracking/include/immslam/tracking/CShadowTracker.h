@@ -63,6 +63,8 @@ class CShadowTracker
   const frontend::CFeaturePatch* patchOf(std::int64_t id) const;
   /** The estimator. */
   const CShadowFilter& filter() const { return m_filter; }
+  /** The SLAM map's inliers of frame `frame`, before that frame (CShadowFilter::observeMap). */
+  void observeMap(std::int64_t frame, std::vector<std::pair<std::int64_t, Vec2>> z) { m_filter.observeMap(frame, std::move(z)); }
   const TShadowReport& lastReport() const { return m_filter.lastReport(); }
 
  private:
