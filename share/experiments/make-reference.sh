@@ -6,12 +6,17 @@
 #        (default --out /tmp/make-reference; relative folders from the repository root;
 #        share/experiments/args.sh)
 # DATASET_FOLDER: rgb.txt + images (../shared/data/README.md). --camera-model/--camera-params: COLMAP's
-# (default from calib.txt: pinhole -> PINHOLE fx,fy,cx,cy held fixed; davison -> RADIAL f,cx,cy,k1,k2
-# refined, started from k1 = -kd1 f^2, the first-order match of Davison's model). Writes
-# OUT/reference.txt, OUT/reference_stats.txt (registered images, points, mean reprojection error) and
-# keeps COLMAP's database and model in OUT. Needs: apt-get install colmap. Nothing is written into the
-# repository. Environment: THREADS (default 2), OVERLAP (sequential matching, default 15),
-# SKIP_MATCHING=1 (reuse OUT/database.db).
+# (default from calib.txt, held fixed: pinhole -> PINHOLE fx,fy,cx,cy; davison -> OPENCV_FISHEYE
+# fx,fy,cx,cy,k1..k4, k fitted by least squares to Davison's r_u = r_d / sqrt(1 - 2 kd1 r_d^2) over the
+# image radius (share/experiments/davison-fisheye-fit.py; residual 0.0003 px for monoslam_testseq).
+# COLMAP's RADIAL cannot follow that model to a wide lens's corners, and a refined focal length drifts
+# on a slow start.) Writes OUT/reference.txt, OUT/reference_stats.txt (registered images, points, mean
+# reprojection error) and keeps COLMAP's database and model in OUT. Needs: apt-get install colmap.
+# Nothing is written into the repository.
+# Environment: THREADS (COLMAP's threads, default 2), OVERLAP (sequential matching, default 15),
+#   REFINE=1 (refine focal length and distortion in bundle adjustment, default 0),
+#   MAPPER_ARGS (extra `colmap mapper` options, e.g. "--Mapper.multiple_models 0"),
+#   SKIP_MATCHING=1 (reuse OUT/database.db: mapping only).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 source share/experiments/args.sh
@@ -25,17 +30,19 @@ args_parse "$@"
 [ -f "${POS[0]}/rgb.txt" ] || args_die "dataset folder '${POS[0]}' has no rgb.txt"
 SEQ=$(cd "${POS[0]}" && pwd); mkdir -p "$OUT"; OUT=$(cd "$OUT" && pwd)
 read -r MODEL W H FX FY CX CY K1 < <(grep -v '^#' "$SEQ/calib.txt" | head -1) || true
-REFINE=0
+REFINE=${REFINE:-0}
 if [[ -n "$CAM_MODEL" && -z "$CAM_PARAMS" ]]; then
   args_die "--camera-model $CAM_MODEL needs --camera-params"
 fi
 if [[ -z "$CAM_MODEL" ]]; then
   case "$MODEL" in
     pinhole) CAM_MODEL=PINHOLE; CAM_PARAMS="$FX,$FY,$CX,$CY" ;;
-    davison) CAM_MODEL=RADIAL; CAM_PARAMS="$FX,$CX,$CY,$(python3 -c "print(-$K1*$FX*$FX)"),0"; REFINE=1 ;;
+    davison) CAM_MODEL=OPENCV_FISHEYE
+             CAM_PARAMS="$FX,$FY,$CX,$CY,$(python3 share/experiments/davison-fisheye-fit.py "$W" "$H" "$FX" "$CX" "$CY" "$K1")" ;;
     *) args_die "calib model '$MODEL' of $SEQ/calib.txt needs --camera-model and --camera-params" ;;
   esac
 fi
+read -r -a MAPPER_EXTRA <<< "${MAPPER_ARGS:-}"
 # Images listed in rgb.txt, in order (COLMAP reads a folder: link them under their own names).
 mkdir -p "$OUT/images"
 grep -v '^#' "$SEQ/rgb.txt" | while read -r ts f; do ln -sf "$SEQ/$f" "$OUT/images/$(basename "$f")"; done
@@ -51,7 +58,8 @@ fi
 rm -rf "$OUT/sparse"; mkdir -p "$OUT/sparse"
 colmap mapper --database_path "$OUT/database.db" --image_path "$OUT/images" --output_path "$OUT/sparse" \
   --Mapper.num_threads "$THREADS" --Mapper.ba_refine_focal_length "$REFINE" --Mapper.ba_refine_extra_params "$REFINE" \
-  --Mapper.ba_refine_principal_point 0 --Mapper.multiple_models 1 --Mapper.init_min_tri_angle 4 >> "$OUT/colmap.log" 2>&1
+  --Mapper.ba_refine_principal_point 0 --Mapper.multiple_models 1 --Mapper.init_min_tri_angle 4 \
+  "${MAPPER_EXTRA[@]}" >> "$OUT/colmap.log" 2>&1
 # The largest model (a slow start can make the mapper begin more than one).
 MODEL_DIR=""; BEST=0
 for d in "$OUT"/sparse/*/; do
