@@ -300,6 +300,23 @@ TEST(ShadowClassifier, HandheldStaticVsMoving)
   EXPECT_GE(double(st.rhoInside3) / st.nRho, 0.97);
 }
 
+namespace
+{
+/** One frame of a sideways drift with some wobble (0.002 units, 0.003 rad): the true camera moves by
+ * the increment, the track is advanced by the increment perturbed with covariance `actual` and told
+ * `stated`. */
+void advanceWithNoisyIncrement(Rng& rng, const Vec3& drift, const Mat6& actual, const Mat6& stated, int frame,
+                               TUncertainPose& truth, TRayTrack& track)
+{
+  TUncertainPose inc;
+  inc.t = drift + 0.002 * gauss3(rng);
+  inc.q = math::quatFromRotationVector(0.003 * gauss3(rng));
+  truth = composePoses(truth, inc);
+  const TUncertainPose noisy = perturbPose(inc, sampleGaussian<6>(rng, actual));
+  track.advance(frame, 1, noisy.t, noisy.q, stated);
+}
+}  // namespace
+
 TEST(ShadowClassifier, SingleRayTestIsCalibratedWithCorrelatedPoses)
 {
   // The three-ray test of CRayClassifier alone, on independent Monte Carlo trials of a static point
@@ -341,12 +358,7 @@ TEST(ShadowClassifier, SingleRayTestIsCalibratedWithCorrelatedPoses)
     track.start(0, measure(truth));
     for (int k = 1; k <= frames; ++k)
     {
-      TUncertainPose inc;
-      inc.t = drift + 0.002 * gauss3(rng);
-      inc.q = math::quatFromRotationVector(0.003 * gauss3(rng));
-      truth = composePoses(truth, inc);
-      const TUncertainPose noisy = perturbPose(inc, sampleGaussian<6>(rng, Cinc));
-      track.advance(k, 1, noisy.t, noisy.q, Cinc);
+      advanceWithNoisyIncrement(rng, drift, Cinc, Cinc, k, truth, track);
       if (k == frames / 2 || k == frames) track.addView(measure(truth));
     }
     const TRayTestResult r = cls.test(track);
@@ -416,12 +428,7 @@ std::pair<double, double> rejectionRates(double actualScale, double pixelSpeed, 
     track.start(0, observe(0));
     for (int k = 1; k <= kFrames; ++k)
     {
-      TUncertainPose inc;
-      inc.t = drift + 0.002 * gauss3(rng);
-      inc.q = math::quatFromRotationVector(0.003 * gauss3(rng));
-      truth = composePoses(truth, inc);
-      const TUncertainPose noisy = perturbPose(inc, sampleGaussian<6>(rng, Cactual));
-      track.advance(k, 1, noisy.t, noisy.q, Cinc);
+      advanceWithNoisyIncrement(rng, drift, Cactual, Cinc, k, truth, track);
       if (k == kFrames / 2 || k == kFrames) track.addView(observe(k));
     }
     const TRayTestResult r = cls.test(track);
