@@ -115,6 +115,7 @@ CRayClassifier::CRayClassifier(const TRayClassifierParams& p, camera::CCameraMod
 {
   if (!m_cam) throw std::invalid_argument("shadow::CRayClassifier: null camera model");
   m_lambda0 = noncentralityForPower(m_p.alpha, 3, m_p.staticPower);
+  m_medianChi2 = math::chi2Quantile(0.5, 3);
   // Power function of the 3-dof test, tabulated up to power 1 - 1e-9.
   const double thr = math::chi2Quantile(1 - m_p.alpha, 3);
   for (int i = 0;; ++i)
@@ -332,7 +333,6 @@ double CRayClassifier::detectionProbability(const TRayTrack& track, const TRayTe
 double CRayClassifier::mapScale(const TRayTrack& track, const TRayTestResult& r, const CMapViews& map) const
 {
   constexpr std::size_t kMaxMapFeatures = 8, kMinMapFeatures = 5;
-  constexpr double kMedianChi2_3 = 2.365973884375;  // median of chi-square with 3 dof
   const TRayView* v[3] = {&track.views[static_cast<std::size_t>(r.viewIndex[0])],
                           &track.views[static_cast<std::size_t>(r.viewIndex[1])],
                           &track.views[static_cast<std::size_t>(r.viewIndex[2])]};
@@ -349,7 +349,7 @@ double CRayClassifier::mapScale(const TRayTrack& track, const TRayTestResult& r,
   }
   if (T.size() < kMinMapFeatures) return 1.0;
   std::nth_element(T.begin(), T.begin() + static_cast<std::ptrdiff_t>(T.size() / 2), T.end());
-  return std::max(1.0, T[T.size() / 2] / kMedianChi2_3);
+  return std::max(1.0, T[T.size() / 2] / m_medianChi2);
 }
 
 EShadowClass CRayClassifier::classify(TRayTrack& track, TDecision* info, TRayTestResult* result,

@@ -208,6 +208,7 @@ class CRayClassifier
   TRayClassifierParams m_p;
   camera::CCameraModel::Ptr m_cam;
   double m_lambda0 = 0;
+  double m_medianChi2 = 0;           ///< median of chi-square with 3 dof (mapScale())
   std::vector<double> m_powerTable;  ///< powerAt() at lambda = i * kPowerStep
   std::vector<Vec3> m_directions;    ///< unit directions (half sphere) of detectionProbability()
 };
