@@ -211,7 +211,7 @@ class CMonoSlamSystem
   std::unordered_set<std::int64_t> m_watched;  ///< shadow features started by watch_features
   int m_watchedVisible = 0;                    ///< of them, pending and searched in this frame
   /** Retired watched features: unit bearing in W and the frame until which it is kept clear. */
-  std::vector<std::pair<Vec3, std::int64_t>> m_retired;  ///< processMeasurements: caller's track -> feature id
+  std::vector<std::pair<Vec3, std::int64_t>> m_retired;
   /** Probation copies in the shadow filter: copy id -> the SLAM feature it tests (startProbation). */
   std::unordered_map<std::int64_t, std::int64_t> m_probation;
   /** Mapped past of shadow features that left the map, emitted at their dynamic decision. */
