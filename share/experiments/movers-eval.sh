@@ -7,7 +7,7 @@
 # Usage: share/experiments/movers-eval.sh SCENARIO.ini [--build DIR] [--out DIR] [--seeds LIST]
 #        (defaults: build, /tmp/movers-eval, 101-140; LIST as 101-140 or 7,11,23; share/experiments/args.sh)
 # Environment: CONFIG (default ini/imm7-shadow.ini), BASE_CONFIG (default ini/imm7.ini), SET (extra
-#   imm-monoslam options for both, e.g. "--set system.watch_features=10"), APP (the imm-monoslam to run,
+#   imm-monoslam options for both, e.g. "--set system.watch_features=0"), APP (the imm-monoslam to run,
 #   default BUILD_DIR/bin/imm-monoslam: another build on the same renders).
 set -euo pipefail
 cd "$(dirname "$0")/../.."

@@ -18,7 +18,7 @@
 # Usage: share/experiments/real-videos.sh [--build DIR] [--out DIR] [--data DIR] [--opencv-doc DIR]
 #        (defaults: build, /tmp/real-videos, $IMMSLAM_SHARED_DATA_DIR or ../shared/data, /usr/share/doc/opencv-doc;
 #        apt-get install opencv-doc; share/experiments/args.sh)
-#        EXTRA_SET="--set system.watch_features=10" adds options to every imm-monoslam run.
+#        EXTRA_SET="--set system.watch_features=0" adds options to every imm-monoslam run.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 source share/experiments/args.sh

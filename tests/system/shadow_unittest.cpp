@@ -360,11 +360,16 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
   // Measured 2026-11-27: full system 0.346 2.410 1.366 0.189 2.182 % (mean 1.299 %); without the
   // shadow filter 2.087 2.297 1.571 1.262 2.194 % (mean 1.882 %); moving->static 1 of 363, static->dynamic
   // 643 of 1155. The claim (paper 2, Fig. 5): the shadow filter keeps the objects out of the estimate;
-  // it does so clearly in 2 of 5 variations. Limits ~1.2x the measured figures.
+  // it does so clearly in 2 of 5 variations. With watched features (the default since): 1.684 0.150
+  // 0.122 0.157 2.393 % (mean 0.907 %), without the shadow filter mean 1.738 %; moving->static 3 of 450,
+  // static->dynamic 531 of 1325. These are single draws of a chaotic run (variants 0 and 4 lose the map
+  // while the cut-out covers it): over RANSAC seeds 1-9 ([slam] seed) the 45 runs give 8 deviations
+  // above 1 % with watched features and 6 without, moving->static 11 of 4409 and 8 of 4071. Limits ~1.2x
+  // the measured figures.
   EXPECT_LE(mean(deviations), 0.75 * mean(deviationsNoShadow));
   EXPECT_LE(mean(deviations), 0.0156);
   EXPECT_GE(tsPooled.trulyDynamic(), 302u);
-  EXPECT_LE(tsPooled.movingAsStaticRate(), 0.0034);
+  EXPECT_LE(tsPooled.movingAsStaticRate(), 0.008);
   EXPECT_LE(tsPooled.staticAsDynamicRate(), 0.67);
 
   // visp_rbt (AprilTag ground truth): a desk cut-out crossing the whole image (13 % on average).
@@ -397,10 +402,12 @@ TEST(ShadowSystem, RealVideoWithPastedMovingObjects)
   // the clean sequence itself gives 1.88-3.05 % over start-up variations (doc/shadow.md); moving->static
   // 0 of 144 (static->dynamic 147 of 154: the desk's background corners mix both). With the handling of
   // movers outside the paper's assumptions (doc/shadow.md, "Movers in the map"): median 2.193 %
-  // (1.807-3.003) vs 1.934 % clean (ratio 1.13), moving->static 0 of 124. Limits ~1.2x.
+  // (1.807-3.003) vs 1.934 % clean (ratio 1.13), moving->static 0 of 124. With watched features (the
+  // default since): median 2.203 % (1.929-2.593) vs 1.908 % clean (ratio 1.15), moving->static 0 of 106,
+  // static->dynamic 80 of 218. Limits ~1.2x.
   EXPECT_LE(median(ates), 1.36 * clean.ate->rmseOverPath);
   EXPECT_LE(median(ates), 0.0263);
-  EXPECT_GE(viPooled.trulyDynamic(), 120u);
+  EXPECT_GE(viPooled.trulyDynamic(), 88u);
   EXPECT_LE(viPooled.movingAsStaticRate(), 0.01);
 }
 
@@ -458,13 +465,14 @@ struct TRealVideoRun
   eval::TConfusionMatrix decisions;  ///< shadow-filter decisions against the masks
 };
 
-/** \param watch [system] watch_features (a camera at rest or panning watching what moves: 10). */
-TRealVideoRun runRealVideo(const std::string& cfg, const std::string& folder, int watch = 0)
+/** \param watch [system] watch_features, or -1 for the config's own (10 by default). */
+TRealVideoRun runRealVideo(const std::string& cfg, const std::string& folder, int watch = -1)
 {
-  const auto out = outDir(std::filesystem::path(folder).filename().string() + "_" + cfg + (watch ? "_watch" : ""));
-  EXPECT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", folder, "--out", out, "--set",
-                    "system.watch_features=" + std::to_string(watch)}),
-            0);
+  const auto out = outDir(std::filesystem::path(folder).filename().string() + "_" + cfg +
+                          (watch >= 0 ? "_watch" + std::to_string(watch) : ""));
+  std::vector<std::string> args{sourceDir() + "/ini/" + cfg + ".ini", folder, "--out", out};
+  if (watch >= 0) args.insert(args.end(), {"--set", "system.watch_features=" + std::to_string(watch)});
+  EXPECT_EQ(runApp(args), 0);
   TRealVideoRun r;
   r.rotationRmseDeg = eval::computeAte(core::readTumTrajectory(out + "/trajectory.txt"),
                                        core::readTumTrajectory(folder + "/groundtruth.txt"), eval::EAlignment::None)
@@ -496,7 +504,7 @@ TEST(ShadowSystem, RealVideoOfAHandMovingABoxInFrontOfAStillCamera)
   ASSERT_TRUE(gunzipFile(doc + "/opencv4/html/box.mp4.gz", video));
   const std::string folder = realVideoFolder(video, "realvideo_box", 640, 480, 560, 0, 0, 0, 0);
   const TRealVideoRun full = runRealVideo("imm7-shadow", folder);
-  const TRealVideoRun watching = runRealVideo("imm7-shadow", folder, 10);
+  const TRealVideoRun notWatching = runRealVideo("imm7-shadow", folder, 0);
   const TRealVideoRun noShadow = runRealVideo("imm7", folder);
   const TRealVideoRun single = runRealVideo("single", folder);
   {
@@ -509,23 +517,22 @@ TEST(ShadowSystem, RealVideoOfAHandMovingABoxInFrontOfAStillCamera)
     EXPECT_GT(direct.size(), 1000u);
     EXPECT_EQ(direct, readFile(folder + "_imm7-shadow/trajectory.txt"));  // runRealVideo's output folder
   }
-  // Measured: full system rotation RMSE FULL_ROT deg, segmentation FULL_SEG %, FULL_DEC decisions,
-  // moving->static FULL_MS against the masks; IMM without shadow filter 0.267 deg, 33.0 %; single model
+  // Measured: full system (watched features, the default) rotation RMSE 2.11 deg, segmentation 85.5 %,
+  // 237 dynamic and 84 static decisions, moving->static 36 of 262 against imm-rotate's MOG2 masks,
+  // which also mark the box while the hand holds it still (for less than half of the video), when a
+  // static decision is what the test should give; without watched features 1.93 deg, 111 / 30
+  // decisions, moving->static 17 of 121. IMM without shadow filter 0.28 deg, 27.3 %; single model
   // 34.9 deg (the IMM without shadow filter explains the box with general motion and a map at
   // infinity). Limits ~1.2x.
-  EXPECT_LT(full.rotationRmseDeg, 100.0);
+  EXPECT_LT(full.rotationRmseDeg, 2.53);
   EXPECT_GT(single.rotationRmseDeg, 10.0) << "the single model follows the box: the test must see that failure";
   EXPECT_GT(full.segmentation, 0.768);
   EXPECT_GT(full.segmentation, noShadow.segmentation + 0.3);
-  EXPECT_GE(full.decisions.trulyDynamic(), 0u);
-  EXPECT_LE(full.decisions.movingAsStaticRate(), 1.0);
-  // With watched features ([system] watch_features = 10, a camera at rest watching what moves):
-  // rotation RMSE 1.83 deg, 226 dynamic and 60 static decisions, moving->static 27 of 245 against
-  // imm-rotate's MOG2 masks, which also mark the box while the hand holds it still (for less than half
-  // of the video), when a static decision is what the test should give.
-  EXPECT_LT(watching.rotationRmseDeg, 2.2);
-  EXPECT_GE(watching.decisions.trulyDynamic(), 176u);
-  EXPECT_LE(watching.decisions.movingAsStaticRate(), 0.17);
+  EXPECT_GE(full.decisions.trulyDynamic(), 210u);
+  EXPECT_LE(full.decisions.movingAsStaticRate(), 0.165);
+  EXPECT_LT(notWatching.rotationRmseDeg, 2.31);
+  EXPECT_GE(notWatching.decisions.trulyDynamic(), 97u);
+  EXPECT_LE(notWatching.decisions.movingAsStaticRate(), 0.17);
 }
 
 TEST(ShadowSystem, RealVideoOfPeopleWalkingSeenByARotatingCamera)
@@ -537,21 +544,19 @@ TEST(ShadowSystem, RealVideoOfPeopleWalkingSeenByARotatingCamera)
   const std::string folder =
       realVideoFolder(doc + "/examples/data/vtest.avi", "realvideo_vtest", 768, 576, 700, 3, 2, 1.5, 300);
   const TRealVideoRun full = runRealVideo("imm7-shadow", folder);
-  const TRealVideoRun watching = runRealVideo("imm7-shadow", folder, 10);
+  const TRealVideoRun notWatching = runRealVideo("imm7-shadow", folder, 0);
   const TRealVideoRun single = runRealVideo("single", folder);
-  // Measured over 795 frames: 0.009 deg (IMM) and 0.33 deg (single model), the rotation family 100 %.
-  // Measured 2026-11-27: full system 0.009 deg, segmentation 100 %; single model 0.140 deg.
+  // Measured over 300 frames: full system 0.009 deg, segmentation 100 %; single model 0.140 deg.
   EXPECT_LT(full.rotationRmseDeg, 0.011);
   EXPECT_LT(full.rotationRmseDeg, single.rotationRmseDeg);
   EXPECT_GT(full.segmentation, 0.99);
-  // With watched features ([system] watch_features = 10) the people are seen while the map is
-  // complete (none without them): 300 frames, 35 of 36 decisions on people dynamic, 2 of 140 on the courtyard dynamic.
-  EXPECT_LE(full.decisions.dynamicAsStatic, 0u) << "nothing moving enters the map";
-  // With the first map's probation and the MOG2 masks: 28 decisions on people dynamic, static->dynamic
-  // 3.4 % (the probation copies add decisions on the first map). Limits ~1.2x.
-  EXPECT_GE(watching.decisions.trulyDynamic(), 23u);
-  EXPECT_LE(watching.decisions.movingAsStaticRate(), 0.095);
-  EXPECT_LE(watching.decisions.staticAsDynamicRate(), 0.041);
+  // The watched features (the default) let the shadow filter see the people while the map is
+  // complete: 27 decisions on people (26 dynamic), 4 of 118 on the courtyard dynamic, against MOG2
+  // masks. Without them 27 decisions, all but one on the first map's probation copies. Limits ~1.2x.
+  EXPECT_GE(full.decisions.trulyDynamic(), 23u);
+  EXPECT_LE(full.decisions.movingAsStaticRate(), 0.095);
+  EXPECT_LE(full.decisions.staticAsDynamicRate(), 0.041);
+  EXPECT_LE(notWatching.decisions.dynamicAsStatic, 0u) << "nothing moving enters the map";
 }
 
 TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)
@@ -611,12 +616,14 @@ TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)
   // 0.101 % (mean 0.098 %; IMM without shadow filter 0.914 / 0.578 / 1.301 %, single model 0.968 /
   // 0.699 / 0.231 %); none of 66 decisions on the hand and the box static; static->dynamic 26 of 290.
   // With the first map's probation and the handover of mapped movers: mean 0.138 %, 0 of 146 on the
-  // hand and the box static, static->dynamic 66 of 525 (the probation copies add decisions).
-  // Limits ~1.2x.
+  // hand and the box static, static->dynamic 66 of 525 (the probation copies add decisions). With
+  // watched features (the default since): mean 0.076 % (IMM without shadow filter 0.983 %, single
+  // model 0.650 %), 2 of 155 on the hand and the box static (the masks also mark the box while the
+  // hand holds it still), static->dynamic 52 of 540. Limits ~1.2x.
   EXPECT_LE(mean(deviation["imm7-shadow"]), 0.5 * mean(deviation["imm7"]));
   EXPECT_LE(mean(deviation["imm7-shadow"]), mean(deviation["single"]));
   EXPECT_LT(mean(deviation["imm7-shadow"]), 0.0015);
   EXPECT_GE(pooled.trulyDynamic(), 55u);
-  EXPECT_LE(pooled.movingAsStaticRate(), 0.01);
+  EXPECT_LE(pooled.movingAsStaticRate(), 0.0155);
   EXPECT_LE(pooled.staticAsDynamicRate(), 0.151);
 }

@@ -1,8 +1,8 @@
 /* End-to-end: moving objects seen by a camera that does not translate (issue 27; doc/shadow.md,
  * "Cameras that do not translate"). The rendered room and boxes of handheld-moving.ini, seen by a
  * camera at rest (ini/scenarios/still-movers.ini) and by one that only pans and tilts
- * (rotating-movers.ini), 240 frames each, the full system with watched features ([system]
- * watch_features = 10, the setting for such a camera): the three-ray test is blind there (every ray
+ * (rotating-movers.ini), 240 frames each, the full system as shipped (with its watched features,
+ * [system] watch_features = 10): the three-ray test is blind there (every ray
  * passes through one centre), so every decision comes from the depth-free test and the watched
  * features (doc/shadow.md). Truth: the renderer's masks. */
 #include <gtest/gtest.h>
@@ -32,8 +32,7 @@ TMoversRun runMovers(const std::string& scenario, const std::string& name)
 {
   const auto out = outDir(name);
   EXPECT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", "--out", out, "--frames", "240", "--set",
-                    "input.scenario=scenarios/" + scenario, "--set",
-                    "system.watch_features=10"}),
+                    "input.scenario=scenarios/" + scenario}),
             0);
   TMoversRun r;
   sim::CSyntheticSource src(sourceDir() + "/ini/scenarios/" + scenario, {}, 240);

@@ -90,7 +90,7 @@ class CMonoSlamSystem
      * features only observe: decided dynamic, they are tracked; decided static, they are retired
      * (never promoted into SLAM, their bearing kept clear of new watched features for
      * max_pending_frames frames). 0: new features only when SLAM needs them (MonoSLAMBOT's policy). */
-    int watch_features = 0;
+    int watch_features = 10;
     /** The weight of a pending_weight text: the number, or -1 for "auto".
      * \throws std::runtime_error naming [section] pending_weight if it is neither. */
     static double parsePendingWeight(const std::string& text, const std::string& section);
