@@ -79,18 +79,55 @@ MatX dominantEigenvectors(const MatX& cov, int r, VecX* eigenvalues)
   return U;
 }
 
+namespace
+{
+void requireLevel(double alpha, const char* what)
+{
+  if (!(alpha > 0 && alpha < 1))
+    throw std::invalid_argument(std::string("immslam/geometry/hypothesis_tests.cpp: ") + what + " needs 0 < alpha < 1");
+}
+
+THypothesisTest testAgainst(const VecX& d, const MatX& cov_dd, int dof, double threshold);
+}  // namespace
+
+TSignificance TSignificance::At(double alpha)
+{
+  requireLevel(alpha, "TSignificance");
+  TSignificance s;
+  s.alpha = alpha;
+  for (int r = 1; r <= 4; ++r) s.chi2[r] = math::chi2Quantile(1.0 - alpha, r);
+  return s;
+}
+
+double TSignificance::threshold(int dof) const
+{
+  return dof >= 1 && dof <= 4 ? chi2[dof] : math::chi2Quantile(1.0 - alpha, dof);
+}
+
 THypothesisTest testRelation(const VecX& d, const MatX& cov_dd, int dof, double alpha)
+{
+  requireLevel(alpha, "testRelation");
+  return testAgainst(d, cov_dd, dof, dof >= 1 ? math::chi2Quantile(1.0 - alpha, dof) : 0.0);
+}
+
+THypothesisTest testRelation(const VecX& d, const MatX& cov_dd, int dof, const TSignificance& level)
+{
+  requireLevel(level.alpha, "testRelation");
+  return testAgainst(d, cov_dd, dof, dof >= 1 ? level.threshold(dof) : 0.0);
+}
+
+namespace
+{
+THypothesisTest testAgainst(const VecX& d, const MatX& cov_dd, int dof, double threshold)
 {
   if (cov_dd.rows() != d.size() || cov_dd.cols() != d.size() || dof < 1 || dof > d.size())
     throw std::invalid_argument(
         "immslam/geometry/hypothesis_tests.cpp: testRelation needs a covariance of the size of d "
         "and 1 <= dof <= rows of d (got " +
         std::to_string(d.size()) + " rows, dof " + std::to_string(dof) + ")");
-  if (!(alpha > 0 && alpha < 1))
-    throw std::invalid_argument("immslam/geometry/hypothesis_tests.cpp: testRelation needs 0 < alpha < 1");
   THypothesisTest out;
   out.dof = dof;
-  out.threshold = math::chi2Quantile(1.0 - alpha, dof);
+  out.threshold = threshold;
   if (!d.allFinite() || !cov_dd.allFinite()) return out;
   VecX lambda;
   const MatX U = dominantEigenvectors(cov_dd, dof, &lambda);
@@ -102,6 +139,7 @@ THypothesisTest testRelation(const VecX& d, const MatX& cov_dd, int dof, double 
   out.accepted = out.valid && out.T < out.threshold;
   return out;
 }
+}  // namespace
 
 THypothesisTest testPointOnPlane(const TUncertainPoint3& X, const TUncertainPlane3& A, double alpha,
                                  const Mat4* cov_XA)

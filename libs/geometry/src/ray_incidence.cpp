@@ -132,10 +132,18 @@ void widestPair(const Vec6 l[3], TRayIncidenceTest& out)
 TRayIncidenceTest threeRaysMeet(const TUncertainLine3& ray1, const TUncertainLine3& ray2,
                                 const TUncertainLine3& ray3, double alpha, const MatX* cov_rays)
 {
+  if (!(alpha > 0 && alpha < 1))
+    throw std::invalid_argument("immslam/geometry/ray_incidence.cpp: threeRaysMeet needs 0 < alpha < 1");
+  return threeRaysMeet(ray1, ray2, ray3, TSignificance::At(alpha), cov_rays);
+}
+
+TRayIncidenceTest threeRaysMeet(const TUncertainLine3& ray1, const TUncertainLine3& ray2,
+                                const TUncertainLine3& ray3, const TSignificance& level, const MatX* cov_rays)
+{
   if (cov_rays && (cov_rays->rows() != 18 || cov_rays->cols() != 18))
     throw std::invalid_argument(
         "immslam/geometry/ray_incidence.cpp: threeRaysMeet needs an 18x18 joint covariance of the rays");
-  if (!(alpha > 0 && alpha < 1))
+  if (!(level.alpha > 0 && level.alpha < 1))
     throw std::invalid_argument("immslam/geometry/ray_incidence.cpp: threeRaysMeet needs 0 < alpha < 1");
 
   const TUncertainLine3* rays[3] = {&ray1, &ray2, &ray3};
@@ -164,9 +172,9 @@ TRayIncidenceTest threeRaysMeet(const TUncertainLine3& ray1, const TUncertainLin
   MatX Sr = Jr * S * Jr.transpose();
   Sr = 0.5 * (Sr + Sr.transpose()).eval();
 
-  out.test = testRelation(dr, Sr, 3, alpha);
-  out.coplanar = testRelation(dr.head<1>(), Sr.topLeftCorner<1, 1>(), 1, alpha);
-  out.onThirdRay = testRelation(dr.tail<2>(), Sr.bottomRightCorner<2, 2>(), 2, alpha);
+  out.test = testRelation(dr, Sr, 3, level);
+  out.coplanar = testRelation(dr.head<1>(), Sr.topLeftCorner<1, 1>(), 1, level);
+  out.onThirdRay = testRelation(dr.tail<2>(), Sr.bottomRightCorner<2, 2>(), 2, level);
 
   // The intersection point with its covariance (first order, from all the rays' covariance).
   Mat46 J_X_Lj, J_X_Li;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <immslam/geometry/construction_matrices.h>
 #include <immslam/geometry/ray_incidence.h>
+#include <immslam/math/chi2.h>
 #include <immslam/math/quaternion.h>
 
 #include "geometry_test_utils.h"
@@ -110,6 +111,33 @@ TEST(ThreeRays, ExactRaysMeetAndIntersectionIsThePoint)
               threeRaysMeet(rays[0], rays[1], rays[2], 0.05).test.T, 1e-9);
   const MatX wrongSize = MatX::Zero(6, 6);
   EXPECT_THROW(threeRaysMeet(rays[0], rays[1], rays[2], 0.05, &wrongSize), std::invalid_argument);
+}
+
+TEST(ThreeRays, ALevelComputedOnceGivesBitwiseTheSameTest)
+{
+  // TSignificance holds the critical values the alpha overloads compute on every call (a bisection
+  // of the incomplete gamma function): the same numbers, so the same decisions, bitwise.
+  for (const double alpha : {0.01, 0.05, 0.2})
+  {
+    const TSignificance level = TSignificance::At(alpha);
+    for (int r = 1; r <= 6; ++r) EXPECT_EQ(level.threshold(r), math::chi2Quantile(1.0 - alpha, r)) << r;
+    Rng rng(31);
+    for (int t = 0; t < 20; ++t)
+    {
+      const TRayScenario s = randomRayScenario(rng);
+      TUncertainLine3 rays[3];
+      for (int k = 0; k < 3; ++k) rays[k] = observeRay(rng, s, k, s.X, t % 2 == 1);
+      const TRayIncidenceTest a = threeRaysMeet(rays[0], rays[1], rays[2], alpha);
+      const TRayIncidenceTest b = threeRaysMeet(rays[0], rays[1], rays[2], level);
+      EXPECT_EQ(a.test.threshold, b.test.threshold);
+      EXPECT_EQ(a.coplanar.threshold, b.coplanar.threshold);
+      EXPECT_EQ(a.onThirdRay.threshold, b.onThirdRay.threshold);
+      EXPECT_EQ(a.test.accepted, b.test.accepted);
+      if (a.test.valid) EXPECT_EQ(a.test.T, b.test.T);
+    }
+  }
+  EXPECT_THROW(TSignificance::At(0.0), std::invalid_argument);
+  EXPECT_THROW(TSignificance::At(1.0), std::invalid_argument);
 }
 
 TEST(ThreeRays, ErrorRates)

@@ -116,6 +116,7 @@ CRayClassifier::CRayClassifier(const TRayClassifierParams& p, camera::CCameraMod
   if (!m_cam) throw std::invalid_argument("shadow::CRayClassifier: null camera model");
   m_lambda0 = noncentralityForPower(m_p.alpha, 3, m_p.staticPower);
   m_medianChi2 = math::chi2Quantile(0.5, 3);
+  m_level = geometry::TSignificance::At(m_p.alpha);
   // Power function of the 3-dof test, tabulated up to power 1 - 1e-9.
   const double thr = math::chi2Quantile(1 - m_p.alpha, 3);
   for (int i = 0;; ++i)
@@ -223,7 +224,7 @@ TRayTestResult CRayClassifier::test(const TRayTrack& track) const
                                            r.rays[a].L.head<3>().dot(r.rays[b].L.head<3>())));
   r.parallaxRad = widest;
   if (!(widest > 1e-9)) return r;  // identical rays: no test
-  r.test = geometry::threeRaysMeet(r.rays[0], r.rays[1], r.rays[2], m_p.alpha, &r.cov_rays);
+  r.test = geometry::threeRaysMeet(r.rays[0], r.rays[1], r.rays[2], m_level, &r.cov_rays);
   r.evaluated = r.test.test.valid;
   return r;
 }
@@ -363,7 +364,7 @@ EShadowClass CRayClassifier::classify(TRayTrack& track, TDecision* info, TRayTes
   const TRayView& vm = track.views[static_cast<std::size_t>(r.viewIndex[1])];
   const TRayView& vk = track.views.back();
   r.depthFree = depthFreeTest(*m_cam, v0.uv, {vm.uv, vm.T_0j, vm.time - v0.time}, {vk.uv, vk.T_0j, vk.time - v0.time},
-                              perturbationTransport(vm.T_0j, vk.T_0j) * vm.T_0j.cov, m_p.sigmaPx, m_p.alpha,
+                              perturbationTransport(vm.T_0j, vk.T_0j) * vm.T_0j.cov, m_p.sigmaPx, m_level,
                               m_p.maxInverseDistance);
   const TDepthFreeTest& d = r.depthFree;
   EShadowClass out = EShadowClass::Pending;
@@ -390,7 +391,7 @@ EShadowClass CRayClassifier::classify(TRayTrack& track, TDecision* info, TRayTes
     {
       const double pRays = r.evaluated ? detectionProbability(track, r, m_p.staticMinVelocityPx) : 0.0;
       const double pDepthFree = track.notTranslating * depthFreeDetectionProbability(
-                                                           d, m_p.staticMinVelocityPx, m_p.alpha, m_p.maxInverseDistance);
+                                                           d, m_p.staticMinVelocityPx, m_level, m_p.maxInverseDistance);
       const double pd = std::max(pRays, pDepthFree);
       track.detectionProbability = pd;
       if (pd >= m_p.staticPower)

@@ -73,8 +73,15 @@ TDepthFreeTest depthFreeTest(const camera::CCameraModel& cam, const Vec2& uv0, c
                              const TDepthFreeView& vk, const Mat6& crossCov_km, double sigmaPx, double alpha,
                              double wMax)
 {
+  return depthFreeTest(cam, uv0, vm, vk, crossCov_km, sigmaPx, geometry::TSignificance::At(alpha), wMax);
+}
+
+TDepthFreeTest depthFreeTest(const camera::CCameraModel& cam, const Vec2& uv0, const TDepthFreeView& vm,
+                             const TDepthFreeView& vk, const Mat6& crossCov_km, double sigmaPx,
+                             const geometry::TSignificance& level, double wMax)
+{
   TDepthFreeTest out;
-  out.threshold = math::chi2Quantile(1 - alpha, 4);
+  out.threshold = level.threshold(4);
   out.tau[0] = vm.time;
   out.tau[1] = vk.time;
   TInputs in{cam, Vec3::Zero(), Mat32::Zero(), {&vm, &vk}, {vm.T_0j.rotation(), vk.T_0j.rotation()}, Mat18::Zero()};
@@ -131,8 +138,14 @@ double depthFreeNoncentrality(const TDepthFreeTest& t, const Vec4& d, double wMa
 
 double depthFreeDetectionProbability(const TDepthFreeTest& t, double speedPx, double alpha, double wMax)
 {
+  return depthFreeDetectionProbability(t, speedPx, geometry::TSignificance::At(alpha), wMax);
+}
+
+double depthFreeDetectionProbability(const TDepthFreeTest& t, double speedPx, const geometry::TSignificance& level,
+                                     double wMax)
+{
   if (!t.evaluated) return 0;
-  const double thr = math::chi2Quantile(1 - alpha, 4);
+  const double thr = level.threshold(4);
   double worst = 1;
   for (int i = 0; i < kPowerDirections; ++i)
   {

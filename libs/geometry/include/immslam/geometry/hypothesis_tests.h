@@ -38,6 +38,21 @@ struct THypothesisTest
  * \f$ U_r^\top \mathbf d \f$, keeps r independent combinations of its rows. */
 MatX dominantEigenvectors(const MatX& cov, int r, VecX* eigenvalues = nullptr);
 
+/** A significance level with the chi-square critical values \f$ \chi^2_{1-\alpha;\,r} \f$ of r = 1-4
+ * degrees of freedom, computed once. math::chi2Quantile is a bisection of the incomplete gamma
+ * function (about 45 evaluations of it); tests run for every feature in every frame (the shadow
+ * filter's) take their thresholds from here: the same numbers, bitwise. */
+struct TSignificance
+{
+  double alpha = 0;
+  double chi2[5] = {0, 0, 0, 0, 0};  ///< chi2[r] for r = 1-4 (chi2[0] unused)
+
+  /** \throws std::invalid_argument for alpha outside (0, 1). */
+  static TSignificance At(double alpha);
+  /** \f$ \chi^2_{1-\alpha;\,r} \f$: from the table for r = 1-4, computed otherwise. */
+  double threshold(int dof) const;
+};
+
 /** Generic test of eq. (14) for a distance vector d (n rows) of a relation with r <= n degrees of
  * freedom.
  *
@@ -53,6 +68,8 @@ MatX dominantEigenvectors(const MatX& cov, int r, VecX* eigenvalues = nullptr);
  * \param alpha significance level, 0 < alpha < 1 (type-I error rate).
  * \throws std::invalid_argument for inconsistent sizes, r outside [1, n] or alpha outside (0, 1). */
 THypothesisTest testRelation(const VecX& d, const MatX& cov_dd, int dof, double alpha);
+/** testRelation() at a level whose critical values are computed already. */
+THypothesisTest testRelation(const VecX& d, const MatX& cov_dd, int dof, const TSignificance& level);
 
 /** \name Incidence and identity tests
  * Each spherically normalizes its inputs first (Heuel's practice; lines also get the covariance

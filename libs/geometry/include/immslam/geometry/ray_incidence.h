@@ -105,4 +105,8 @@ struct TRayIncidenceTest
  * \throws std::invalid_argument for a cov_rays that is not 18x18 or alpha outside (0, 1). */
 TRayIncidenceTest threeRaysMeet(const TUncertainLine3& ray1, const TUncertainLine3& ray2,
                                 const TUncertainLine3& ray3, double alpha, const MatX* cov_rays = nullptr);
+/** threeRaysMeet() at a level whose critical values are computed already (TSignificance::At). */
+TRayIncidenceTest threeRaysMeet(const TUncertainLine3& ray1, const TUncertainLine3& ray2,
+                                const TUncertainLine3& ray3, const TSignificance& level,
+                                const MatX* cov_rays = nullptr);
 }  // namespace immslam::geometry

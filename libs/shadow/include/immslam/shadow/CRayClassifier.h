@@ -209,6 +209,7 @@ class CRayClassifier
   camera::CCameraModel::Ptr m_cam;
   double m_lambda0 = 0;
   double m_medianChi2 = 0;           ///< median of chi-square with 3 dof (mapScale())
+  geometry::TSignificance m_level;   ///< alpha with its chi-square critical values (computed once)
   std::vector<double> m_powerTable;  ///< powerAt() at lambda = i * kPowerStep
   std::vector<Vec3> m_directions;    ///< unit directions (half sphere) of detectionProbability()
 };

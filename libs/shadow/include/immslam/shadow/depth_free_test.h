@@ -11,6 +11,7 @@
 #pragma once
 
 #include <immslam/camera/CCameraModel.h>
+#include <immslam/geometry/hypothesis_tests.h>
 #include <immslam/shadow/relative_pose.h>
 
 namespace immslam::shadow
@@ -60,6 +61,10 @@ struct TDepthFreeTest
 TDepthFreeTest depthFreeTest(const camera::CCameraModel& cam, const Vec2& uv0, const TDepthFreeView& vm,
                              const TDepthFreeView& vk, const Mat6& crossCov_km, double sigmaPx, double alpha,
                              double wMax);
+/** depthFreeTest() at a level whose critical values are computed already (geometry::TSignificance). */
+TDepthFreeTest depthFreeTest(const camera::CCameraModel& cam, const Vec2& uv0, const TDepthFreeView& vm,
+                             const TDepthFreeView& vk, const Mat6& crossCov_km, double sigmaPx,
+                             const geometry::TSignificance& level, double wMax);
 
 /** Non-centrality of depthFreeTest() for a point whose image moved by d (px) between the views
  * (d = [d_m; d_k]): \f$ \lambda(d) = \min_{|a| \le w_{max}} (d - a g)^\top S^{-1} (d - a g) \f$ (the
@@ -69,4 +74,7 @@ double depthFreeNoncentrality(const TDepthFreeTest& t, const Vec4& d, double wMa
 /** Probability that depthFreeTest() at level alpha rejects a point whose image moves at a constant
  * speedPx pixels per frame (displaced by speedPx tau_j at view j), in its worst image direction. */
 double depthFreeDetectionProbability(const TDepthFreeTest& t, double speedPx, double alpha, double wMax);
+/** The same at a level whose critical values are computed already. */
+double depthFreeDetectionProbability(const TDepthFreeTest& t, double speedPx, const geometry::TSignificance& level,
+                                     double wMax);
 }  // namespace immslam::shadow
