@@ -87,7 +87,28 @@ void requireLevel(double alpha, const char* what)
     throw std::invalid_argument(std::string("immslam/geometry/hypothesis_tests.cpp: ") + what + " needs 0 < alpha < 1");
 }
 
-THypothesisTest testAgainst(const VecX& d, const MatX& cov_dd, int dof, double threshold);
+/** testRelation() against a given critical value. */
+THypothesisTest testAgainst(const VecX& d, const MatX& cov_dd, int dof, double threshold)
+{
+  if (cov_dd.rows() != d.size() || cov_dd.cols() != d.size() || dof < 1 || dof > d.size())
+    throw std::invalid_argument(
+        "immslam/geometry/hypothesis_tests.cpp: testRelation needs a covariance of the size of d "
+        "and 1 <= dof <= rows of d (got " +
+        std::to_string(d.size()) + " rows, dof " + std::to_string(dof) + ")");
+  THypothesisTest out;
+  out.dof = dof;
+  out.threshold = threshold;
+  if (!d.allFinite() || !cov_dd.allFinite()) return out;
+  VecX lambda;
+  const MatX U = dominantEigenvectors(cov_dd, dof, &lambda);
+  // The kept eigenvalues must be clearly positive, relative to the largest one.
+  if (!(lambda[0] > 0) || !(lambda[dof - 1] > 1e-14 * lambda[0])) return out;
+  const VecX z = U.transpose() * d;
+  out.T = (z.array().square() / lambda.array()).sum();
+  out.valid = std::isfinite(out.T);
+  out.accepted = out.valid && out.T < out.threshold;
+  return out;
+}
 }  // namespace
 
 TSignificance TSignificance::At(double alpha)
@@ -115,31 +136,6 @@ THypothesisTest testRelation(const VecX& d, const MatX& cov_dd, int dof, const T
   requireLevel(level.alpha, "testRelation");
   return testAgainst(d, cov_dd, dof, dof >= 1 ? level.threshold(dof) : 0.0);
 }
-
-namespace
-{
-THypothesisTest testAgainst(const VecX& d, const MatX& cov_dd, int dof, double threshold)
-{
-  if (cov_dd.rows() != d.size() || cov_dd.cols() != d.size() || dof < 1 || dof > d.size())
-    throw std::invalid_argument(
-        "immslam/geometry/hypothesis_tests.cpp: testRelation needs a covariance of the size of d "
-        "and 1 <= dof <= rows of d (got " +
-        std::to_string(d.size()) + " rows, dof " + std::to_string(dof) + ")");
-  THypothesisTest out;
-  out.dof = dof;
-  out.threshold = threshold;
-  if (!d.allFinite() || !cov_dd.allFinite()) return out;
-  VecX lambda;
-  const MatX U = dominantEigenvectors(cov_dd, dof, &lambda);
-  // The kept eigenvalues must be clearly positive, relative to the largest one.
-  if (!(lambda[0] > 0) || !(lambda[dof - 1] > 1e-14 * lambda[0])) return out;
-  const VecX z = U.transpose() * d;
-  out.T = (z.array().square() / lambda.array()).sum();
-  out.valid = std::isfinite(out.T);
-  out.accepted = out.valid && out.T < out.threshold;
-  return out;
-}
-}  // namespace
 
 THypothesisTest testPointOnPlane(const TUncertainPoint3& X, const TUncertainPlane3& A, double alpha,
                                  const Mat4* cov_XA)
