@@ -517,11 +517,12 @@ TEST(ShadowSystem, RealVideoOfAHandMovingABoxInFrontOfAStillCamera)
     EXPECT_GT(direct.size(), 1000u);
     EXPECT_EQ(direct, readFile(folder + "_imm7-shadow/trajectory.txt"));  // runRealVideo's output folder
   }
-  // Measured: full system (watched features, the default) rotation RMSE 2.11 deg, segmentation 85.5 %,
-  // 237 dynamic and 84 static decisions, moving->static 36 of 262 against imm-rotate's MOG2 masks,
+  // Measured: full system (watched features, the default) rotation RMSE 2.12 deg, segmentation 84.8 %,
+  // 233 dynamic and 49 static decisions, moving->static 22 of 244 against imm-rotate's MOG2 masks
+  // (36 of 262 before static decisions waited among dynamic features, CShadowFilter::amongDynamic),
   // which also mark the box while the hand holds it still (for less than half of the video), when a
-  // static decision is what the test should give; without watched features 1.93 deg, 111 / 30
-  // decisions, moving->static 17 of 121. IMM without shadow filter 0.28 deg, 27.3 %; single model
+  // static decision is what the test should give; without watched features 1.93 deg, 107 / 31
+  // decisions, moving->static 18 of 118. IMM without shadow filter 0.28 deg, 27.3 %; single model
   // 34.9 deg (the IMM without shadow filter explains the box with general motion and a map at
   // infinity). Limits ~1.2x.
   EXPECT_LT(full.rotationRmseDeg, 2.53);
@@ -529,7 +530,7 @@ TEST(ShadowSystem, RealVideoOfAHandMovingABoxInFrontOfAStillCamera)
   EXPECT_GT(full.segmentation, 0.768);
   EXPECT_GT(full.segmentation, noShadow.segmentation + 0.3);
   EXPECT_GE(full.decisions.trulyDynamic(), 210u);
-  EXPECT_LE(full.decisions.movingAsStaticRate(), 0.165);
+  EXPECT_LE(full.decisions.movingAsStaticRate(), 0.108);
   EXPECT_LT(notWatching.rotationRmseDeg, 2.31);
   EXPECT_GE(notWatching.decisions.trulyDynamic(), 97u);
   EXPECT_LE(notWatching.decisions.movingAsStaticRate(), 0.17);
@@ -551,7 +552,7 @@ TEST(ShadowSystem, RealVideoOfPeopleWalkingSeenByARotatingCamera)
   EXPECT_LT(full.rotationRmseDeg, single.rotationRmseDeg);
   EXPECT_GT(full.segmentation, 0.99);
   // The watched features (the default) let the shadow filter see the people while the map is
-  // complete: 27 decisions on people (26 dynamic), 4 of 118 on the courtyard dynamic, against MOG2
+  // complete: 27 decisions on people (26 dynamic), 2 of 111 on the courtyard dynamic, against MOG2
   // masks. Without them 27 decisions, all but one on the first map's probation copies. Limits ~1.2x.
   EXPECT_GE(full.decisions.trulyDynamic(), 23u);
   EXPECT_LE(full.decisions.movingAsStaticRate(), 0.095);

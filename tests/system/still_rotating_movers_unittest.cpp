@@ -60,25 +60,30 @@ TMoversRun runMovers(const std::string& scenario, const std::string& name)
 
 TEST(MoversWithoutTranslation, CameraAtRestDecidesAndKeepsStill)
 {
-  // Measured (seed 7, 240 frames): 154 decisions, moving->static 2/39 (boxes slower than
+  // Measured (seed 7, 240 frames): 142 decisions, moving->static 1/27 (boxes slower than
   // static_min_velocity_px in the image while decided, below the power guarantee), static->dynamic
-  // 4/115, rotation RMSE 0.011 deg, no translation. Before the depth-free test and the watched
-  // features: no decision at all. With the first map's probation static->dynamic is 4.5 % (its copies
-  // add decisions on the first map). Limits at about 1.2 x.
+  // 7/115, rotation RMSE 0.011 deg, no translation. Before the depth-free test and the watched
+  // features: no decision at all. Static decisions wait among dynamic features
+  // (CShadowFilter::amongDynamic): before that rule this seed gave 154 decisions, moving->static 2/39,
+  // static->dynamic 4/115; over the scene's seeds 1-10 (imm-render --frames 240) the rule gives
+  // moving->static 13/505 against 23/527 and static->dynamic 46/1226 against 46/1264 (the fewer
+  // decisions: features waiting near a box hold watched slots). Limits at about 1.2 x.
   const TMoversRun r = runMovers("still-movers.ini", "movers_still");
-  EXPECT_GE(r.decisions.trulyDynamic(), 32u) << "the boxes must be seen and decided";
+  EXPECT_GE(r.decisions.trulyDynamic(), 22u) << "the boxes must be seen and decided";
   EXPECT_GE(r.decisions.trulyStatic(), 96u);
   EXPECT_LE(r.decisions.movingAsStaticRate(), 0.062);
-  EXPECT_LE(r.decisions.staticAsDynamicRate(), 0.054);
+  EXPECT_LE(r.decisions.staticAsDynamicRate(), 0.073);
   EXPECT_LT(r.rotationRmseDeg, 0.013);
   EXPECT_LT(r.maxTranslation, 1e-3);
 }
 
 TEST(MoversWithoutTranslation, RotatingCameraDecidesAndFollowsTheRoom)
 {
-  // Measured (seed 7, 240 frames): 149 decisions, moving->static 5/33, static->dynamic 4/116,
-  // rotation RMSE 0.022 deg, largest translation 0.0002. With the first map's probation: 25 decisions
-  // on the boxes dynamic, static->dynamic 4.4 %. Limits at about 1.2 x.
+  // Measured (seed 7, 240 frames): 161 decisions, moving->static 4/25, static->dynamic 6/136,
+  // rotation RMSE 0.020 deg, largest translation 0.0001 (before static decisions waited among dynamic
+  // features: 149 decisions, 5/33, 4/116; over seeds 1-10, moving->static 17/365 against 18/371,
+  // static->dynamic 47/1300 against 56/1298). With the first map's probation: 25 decisions on the
+  // boxes dynamic, static->dynamic 4.4 %. Limits at about 1.2 x.
   const TMoversRun r = runMovers("rotating-movers.ini", "movers_rotating");
   EXPECT_GE(r.decisions.trulyDynamic(), 21u) << "the boxes must be seen and decided";
   EXPECT_GE(r.decisions.trulyStatic(), 96u);

@@ -196,9 +196,23 @@ std::vector<TPromotion> CShadowFilter::releaseUnresolved(int maxCount, int minMe
   return out;
 }
 
+bool CShadowFilter::amongDynamic(const Vec2& uv, const std::vector<Vec2>& dynamicUv) const
+{
+  const double radius = m_cam->width() / kAmongDynamicWidthFraction;
+  int n = 0;
+  for (const auto& d : dynamicUv)
+    if ((d - uv).squaredNorm() < radius * radius && ++n >= kAmongDynamicCount) return true;
+  return false;
+}
+
 void CShadowFilter::classifyAndManage()
 {
   const auto t0 = std::chrono::steady_clock::now();
+  // Where the dynamic features measured in this frame are: a static decision waits while the
+  // feature is among them (amongDynamic).
+  std::vector<Vec2> dynamicUv;
+  for (const auto& f : m_features)
+    if (f.cls == EShadowClass::Dynamic && f.measured) dynamicUv.push_back(f.uv);
   std::vector<TShadowFeature> kept;
   kept.reserve(m_features.size());
   for (auto& f : m_features)
@@ -209,7 +223,8 @@ void CShadowFilter::classifyAndManage()
     {
       TDecision info;
       TRayTestResult r;
-      const EShadowClass c = m_classifier.classify(f.track, &info, &r, m_map.empty() ? nullptr : &m_map);
+      EShadowClass c = m_classifier.classify(f.track, &info, &r, m_map.empty() ? nullptr : &m_map);
+      if (c == EShadowClass::Static && amongDynamic(f.uv, dynamicUv)) c = EShadowClass::Pending;
       if (c != EShadowClass::Pending)
       {
         info.id = f.id;

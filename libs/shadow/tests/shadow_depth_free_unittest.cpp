@@ -7,6 +7,8 @@
  * conservative when the camera translates, and its predicted power matches the rejections of
  * points that move in the image. */
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <immslam/shadow/CShadowFilter.h>
 #include <immslam/shadow/depth_free_test.h>
 
@@ -199,8 +201,16 @@ TEST(DepthFree, StillCameraDecidesMoversDynamicAndPromotesStillPointsAsRaysOfUnk
   CShadowFilter sf(o, cam);
   Rng rng(14);
   std::vector<Vec2> still, moving;
-  for (int i = 0; i < 10; ++i) still.emplace_back(uniform(rng, 30, 290), uniform(rng, 30, 210));
   for (int i = 0; i < 10; ++i) moving.emplace_back(uniform(rng, 60, 260), uniform(rng, 60, 180));
+  // Still points apart from the movers (more than an eighth of the width plus the 15 px they move
+  // before the stills are decided): a still point among moving ones waits
+  // (FeaturesBornOnAPausingObjectWaitAmongItsDynamicFeatures).
+  while (still.size() < 10)
+  {
+    const Vec2 uv(uniform(rng, 5, 315), uniform(rng, 5, 235));
+    if (std::all_of(moving.begin(), moving.end(), [&](const Vec2& m) { return (m - uv).norm() > 320.0 / 8 + 15; }))
+      still.push_back(uv);
+  }
   std::vector<Vec2> velocity;
   for (int i = 0; i < 10; ++i)
   {
@@ -255,6 +265,78 @@ TEST(DepthFree, StillCameraDecidesMoversDynamicAndPromotesStillPointsAsRaysOfUnk
       EXPECT_EQ(cls, EShadowClass::Dynamic);
       EXPECT_LE(frame, 3 + 10);
     }
+  }
+}
+
+TEST(DepthFree, FeaturesBornOnAPausingObjectWaitAmongItsDynamicFeatures)
+{
+  // A still camera; an object (six features within 15 px) moves 1.5 px per frame, pauses for 40
+  // frames, then moves back; three new features start on it during the pause, six background
+  // features far from it. While paused, the new features do not move: the classifier alone calls them
+  // static within 15 frames (an object at a turning point, a person standing). Among at least two
+  // dynamic features measured within an eighth of the image width, a static decision waits: the new
+  // features stay pending through the pause and are decided dynamic once the object moves again; the
+  // background is decided static as before.
+  const auto cam = test::simCamera();
+  CShadowFilter::TOptions o;
+  CShadowFilter sf(o, cam);
+  Rng rng(21);
+  std::vector<Vec2> object, background, born;
+  for (int i = 0; i < 6; ++i) object.emplace_back(200 + uniform(rng, -15, 15), 120 + uniform(rng, -15, 15));
+  for (int i = 0; i < 6; ++i) background.emplace_back(uniform(rng, 20, 90), uniform(rng, 20, 220));
+  for (int i = 0; i < 3; ++i) born.emplace_back(uniform(rng, -12, 12), uniform(rng, -12, 12));  // object frame
+  // The object's offset at frame k: moving, paused (frames 25-64), moving back.
+  const auto offset = [](int k) {
+    const double x = k <= 25 ? 1.5 * k : (k <= 64 ? 37.5 : 37.5 - 1.5 * (k - 64));
+    return Vec2(x, 0);
+  };
+  TCameraMotion m;
+  m.cov_increment = poseCov(1e-5, 1e-4);
+  m.pNotTranslating = 0.999;
+  std::vector<std::int64_t> objectIds, backgroundIds, bornIds;
+  std::map<std::int64_t, std::pair<EShadowClass, int>> decided;
+  for (int k = 0; k <= 90; ++k)
+  {
+    m.frame = k;
+    m.timestamp = k / 30.0;
+    std::vector<std::pair<std::int64_t, Vec2>> z;
+    for (std::size_t i = 0; i < objectIds.size(); ++i) z.emplace_back(objectIds[i], noisy(rng, object[i] + offset(k)));
+    for (std::size_t i = 0; i < backgroundIds.size(); ++i) z.emplace_back(backgroundIds[i], noisy(rng, background[i]));
+    const Vec2 centre = Vec2(200, 120) + offset(k);
+    for (std::size_t i = 0; i < bornIds.size(); ++i) z.emplace_back(bornIds[i], noisy(rng, centre + born[i]));
+    const TShadowReport& rep = sf.processMeasurements(m, z);
+    for (const auto& d : rep.decisions) decided[d.id] = {d.cls, k};
+    if (k == 0)
+    {
+      std::vector<Vec2> all = object;
+      objectIds = sf.addFeatures(all);
+      backgroundIds = sf.addFeatures(background);
+    }
+    if (k == 30)
+    {
+      std::vector<Vec2> uv;
+      for (const auto& b : born) uv.push_back(centre + b);
+      bornIds = sf.addFeatures(uv);
+    }
+  }
+  for (auto id : objectIds)
+  {
+    ASSERT_TRUE(decided.count(id));
+    EXPECT_EQ(decided[id].first, EShadowClass::Dynamic);
+  }
+  for (auto id : backgroundIds)
+  {
+    ASSERT_TRUE(decided.count(id));
+    EXPECT_EQ(decided[id].first, EShadowClass::Static);
+    EXPECT_LE(decided[id].second, 15);
+  }
+  for (auto id : bornIds)
+  {
+    ASSERT_TRUE(decided.count(id)) << "a feature on the object must be decided once it moves again";
+    std::printf("[ info     ] feature born on the paused object: %s at frame %d\n",
+                shadow::className(decided[id].first).c_str(), decided[id].second);
+    EXPECT_EQ(decided[id].first, EShadowClass::Dynamic);
+    EXPECT_GT(decided[id].second, 64);
   }
 }
 }  // namespace immslam::shadow
