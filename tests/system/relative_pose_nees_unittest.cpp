@@ -6,6 +6,7 @@
  * run's units through the scale of its Sim(3) alignment), over windows starting every 5 frames. */
 #include <gtest/gtest.h>
 #include <immslam/eval/ate.h>
+#include <immslam/math/chi2.h>
 #include <immslam/shadow/CRayClassifier.h>
 #include <immslam/shadow/relative_pose.h>
 #include <immslam/shadow/shadow_types.h>
@@ -133,12 +134,13 @@ TSummary summarise(std::vector<double> v, double chi95)
   return s;
 }
 
-constexpr double kChi2_3_95 = 7.815, kChi2_5_95 = 11.070, kChi2_6_95 = 12.592;
+/** The chi-square 95 % bound of NEES with this many degrees of freedom. */
+double bound95(int dof) { return math::chi2Quantile(0.95, dof); }
 
 void report(const char* what, int window, const TNees& n)
 {
-  const TSummary r = summarise(n.rotation, kChi2_3_95), p = summarise(n.pose, kChi2_6_95),
-                 l = summarise(n.poseLocalScale, kChi2_5_95);
+  const TSummary r = summarise(n.rotation, bound95(3)), p = summarise(n.pose, bound95(6)),
+                 l = summarise(n.poseLocalScale, bound95(5));
   std::printf("%s, %2d frames: %zu windows; NEES median / inside 95 %%: rotation %.2f / %.1f %% (chi2_3 median "
               "2.37), pose %.2f / %.1f %% (chi2_6: 5.35), pose at the window's scale %.2f / %.1f %% (chi2_5: 4.35)\n",
               what, window, n.rotation.size(), r.median, 100 * r.inside95, p.median, 100 * p.inside95, l.median,
@@ -163,9 +165,9 @@ TEST(RelativePoseNees, ComposedIncrementsAreNotOverConfidentInAStaticWorld)
     TNees n;
     for (const auto& run : runs) addNees(run, window, 1, n);
     report("handheld.ini seeds 1-3", window, n);
-    const TSummary r = summarise(n.rotation, kChi2_3_95), p = summarise(n.pose, kChi2_6_95);
-    EXPECT_LT(r.median, 2.37) << "window " << window;
-    EXPECT_LT(p.median, 5.35) << "window " << window;
+    const TSummary r = summarise(n.rotation, bound95(3)), p = summarise(n.pose, bound95(6));
+    EXPECT_LT(r.median, math::chi2Quantile(0.5, 3)) << "window " << window;
+    EXPECT_LT(p.median, math::chi2Quantile(0.5, 6)) << "window " << window;
     EXPECT_GE(r.inside95, 0.90) << "window " << window;
     EXPECT_GE(p.inside95, 0.85) << "window " << window;
   }
@@ -199,7 +201,7 @@ TEST(RelativePoseNees, DISABLED_HoldoutReport)
         addNees(runs[i], window, 1, n);
         if (window == 20)
           std::printf("  seed %zu: ATE %.2f %% of path, rotation NEES inside 95 %% %.1f %%\n", 101 + i,
-                      runs[i].atePercentOfPath, 100 * summarise(n.rotation, kChi2_3_95).inside95);
+                      runs[i].atePercentOfPath, 100 * summarise(n.rotation, bound95(3)).inside95);
         all.rotation.insert(all.rotation.end(), n.rotation.begin(), n.rotation.end());
         all.pose.insert(all.pose.end(), n.pose.begin(), n.pose.end());
         all.poseLocalScale.insert(all.poseLocalScale.end(), n.poseLocalScale.begin(), n.poseLocalScale.end());
