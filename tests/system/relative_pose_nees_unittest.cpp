@@ -6,6 +6,7 @@
  * run's units through the scale of its Sim(3) alignment), over windows starting every 5 frames. */
 #include <gtest/gtest.h>
 #include <immslam/eval/ate.h>
+#include <immslam/eval/consistency.h>
 #include <immslam/math/chi2.h>
 #include <immslam/shadow/CRayClassifier.h>
 #include <immslam/shadow/relative_pose.h>
@@ -102,19 +103,17 @@ void addNees(const TRun& run, int window, std::size_t from, TNees& out, EWindows
     const auto g = shadow::TCameraMotion::FromPoses(run.gt[a].p_W_C, run.gt[a].q_W_C, run.gt[a + w].p_W_C,
                                                     run.gt[a + w].q_W_C);
     const Vec6 d = shadow::posePerturbation(track.T_0k.t, track.T_0k.q, g.t / run.scale, g.dq);
-    const Mat3 Srot = track.T_0k.cov.bottomRightCorner<3, 3>();
-    out.rotation.push_back(d.tail<3>().dot(Srot.ldlt().solve(d.tail<3>())));
-    out.pose.push_back(d.dot(track.T_0k.cov.ldlt().solve(d)));
+    const Mat6& P = track.T_0k.cov;
+    out.rotation.push_back(eval::nees(d.tail<3>(), P.bottomRightCorner<3, 3>()));
+    out.pose.push_back(eval::nees(d, P));
     // The window's own scale (the tests' rays meet or not whatever the scale of the relative motion):
     // d(s) = d0 + s e with e = [g.t / scale; 0], the NEES minimised over s (5 dof).
     Vec6 e = Vec6::Zero();
     e.head<3>() = g.t / run.scale;
     const Vec6 d0 = d - e;
-    const auto ldlt = track.T_0k.cov.ldlt();
-    const Vec6 We = ldlt.solve(e);
+    const Vec6 We = P.ldlt().solve(e);
     const double s = e.dot(We) > 0 ? -d0.dot(We) / e.dot(We) : 1.0;
-    const Vec6 ds = d0 + s * e;
-    out.poseLocalScale.push_back(ds.dot(ldlt.solve(ds)));
+    out.poseLocalScale.push_back(eval::nees(d0 + s * e, P));
   }
 }
 

@@ -519,7 +519,7 @@ TEST(ShadowSystem, RealVideoOfAHandMovingABoxInFrontOfAStillCamera)
   }
   // Measured: full system (watched features, the default) rotation RMSE 2.12 deg, segmentation 84.8 %,
   // 233 dynamic and 49 static decisions, moving->static 22 of 244 against imm-rotate's MOG2 masks
-  // (36 of 262 before static decisions waited among dynamic features, CShadowFilter::amongDynamic),
+  // (36 of 262 before static decisions waited among dynamic features, amongDynamic in CShadowFilter.cpp),
   // which also mark the box while the hand holds it still (for less than half of the video), when a
   // static decision is what the test should give; without watched features 1.93 deg, 107 / 31
   // decisions, moving->static 18 of 118. IMM without shadow filter 0.28 deg, 27.3 %; single model

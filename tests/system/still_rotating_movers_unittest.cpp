@@ -64,7 +64,7 @@ TEST(MoversWithoutTranslation, CameraAtRestDecidesAndKeepsStill)
   // static_min_velocity_px in the image while decided, below the power guarantee), static->dynamic
   // 7/115, rotation RMSE 0.011 deg, no translation. Before the depth-free test and the watched
   // features: no decision at all. Static decisions wait among dynamic features
-  // (CShadowFilter::amongDynamic): before that rule this seed gave 154 decisions, moving->static 2/39,
+  // (amongDynamic in CShadowFilter.cpp): before that rule this seed gave 154 decisions, moving->static 2/39,
   // static->dynamic 4/115; over the scene's seeds 1-10 (imm-render --frames 240) the rule gives
   // moving->static 13/505 against 23/527 and static->dynamic 46/1226 against 46/1264 (the fewer
   // decisions: features waiting near a box hold watched slots). Limits at about 1.2 x.

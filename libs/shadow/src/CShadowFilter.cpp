@@ -196,20 +196,29 @@ std::vector<TPromotion> CShadowFilter::releaseUnresolved(int maxCount, int minMe
   return out;
 }
 
-bool CShadowFilter::amongDynamic(const Vec2& uv, const std::vector<Vec2>& dynamicUv) const
+namespace
 {
-  const double radius = m_cam->width() / kAmongDynamicWidthFraction;
+/** Whether at least 2 of the dynamic features measured in this frame (`dynamicUv`) lie within `radius`
+ * px of pixel `uv` (one dynamic neighbour may be a false decision). A static decision there waits
+ * (classifyAndManage): a point that does not move among points of an object seen moving is more likely
+ * that object at rest for a while (a turning point, a pause, a person standing) than the background,
+ * and the classifier's guarantee (no mover faster than static_min_velocity_px promoted) says nothing
+ * about a mover that is momentarily still. */
+bool amongDynamic(const Vec2& uv, const std::vector<Vec2>& dynamicUv, double radius)
+{
   int n = 0;
   for (const auto& d : dynamicUv)
-    if ((d - uv).squaredNorm() < radius * radius && ++n >= kAmongDynamicCount) return true;
+    if ((d - uv).squaredNorm() < radius * radius && ++n >= 2) return true;
   return false;
 }
+}  // namespace
 
 void CShadowFilter::classifyAndManage()
 {
   const auto t0 = std::chrono::steady_clock::now();
   // Where the dynamic features measured in this frame are: a static decision waits while the
-  // feature is among them (amongDynamic).
+  // feature is among them (amongDynamic), within a cell of SLAM's default 8 x 6 detection grid.
+  const double amongRadius = m_cam->width() / 8.0;
   std::vector<Vec2> dynamicUv;
   for (const auto& f : m_features)
     if (f.cls == EShadowClass::Dynamic && f.measured) dynamicUv.push_back(f.uv);
@@ -224,7 +233,7 @@ void CShadowFilter::classifyAndManage()
       TDecision info;
       TRayTestResult r;
       EShadowClass c = m_classifier.classify(f.track, &info, &r, m_map.empty() ? nullptr : &m_map);
-      if (c == EShadowClass::Static && amongDynamic(f.uv, dynamicUv)) c = EShadowClass::Pending;
+      if (c == EShadowClass::Static && amongDynamic(f.uv, dynamicUv, amongRadius)) c = EShadowClass::Pending;
       if (c != EShadowClass::Pending)
       {
         info.id = f.id;

@@ -7,10 +7,10 @@
  * conservative when the camera translates, and its predicted power matches the rejections of
  * points that move in the image. */
 #include <gtest/gtest.h>
-
-#include <algorithm>
 #include <immslam/shadow/CShadowFilter.h>
 #include <immslam/shadow/depth_free_test.h>
+
+#include <algorithm>
 
 #include <cmath>
 #include <cstdio>
@@ -308,8 +308,7 @@ TEST(DepthFree, FeaturesBornOnAPausingObjectWaitAmongItsDynamicFeatures)
     for (const auto& d : rep.decisions) decided[d.id] = {d.cls, k};
     if (k == 0)
     {
-      std::vector<Vec2> all = object;
-      objectIds = sf.addFeatures(all);
+      objectIds = sf.addFeatures(object);
       backgroundIds = sf.addFeatures(background);
     }
     if (k == 30)

@@ -199,15 +199,6 @@ class CShadowFilter
   void predictAll(const TCameraMotion& motion);
   void updateFeature(TShadowFeature& f, const Vec2& z);
   void classifyAndManage();
-  /** Whether at least kAmongDynamicCount of the dynamic features measured in this frame (`dynamicUv`)
-   * lie within 1 / kAmongDynamicWidthFraction of the image width of pixel `uv`. A static decision
-   * there waits (classifyAndManage): a point that does not move among points of an object seen moving
-   * is more likely that object at rest for a while (a turning point, a pause, a person standing) than
-   * the background, and the classifier's guarantee (no mover faster than static_min_velocity_px
-   * promoted) says nothing about a mover that is momentarily still. */
-  bool amongDynamic(const Vec2& uv, const std::vector<Vec2>& dynamicUv) const;
-  static constexpr int kAmongDynamicCount = 2;              ///< one dynamic neighbour may be a false decision
-  static constexpr double kAmongDynamicWidthFraction = 8;  ///< a cell of SLAM's default 8 x 6 detection grid
   void endFrame();
   TPromotion makePromotion(const TShadowFeature& f, const TRayTestResult& r) const;
 
