@@ -58,8 +58,8 @@ core::TStampedPose carried(const core::TStampedPose& to, const core::TStampedPos
 
 CKeyframeSmoother::CKeyframeSmoother(const TOptions& opts, double fx, double fy) : m_opts(opts), m_fx(fx), m_fy(fy)
 {
-  if (m_opts.windowKeyframes < m_opts.heldKeyframes + 1)
-    throw std::invalid_argument("CKeyframeSmoother: windowKeyframes must exceed heldKeyframes");
+  if (m_opts.windowKeyframes < 2) throw std::invalid_argument("CKeyframeSmoother: windowKeyframes must be >= 2");
+  if (!(m_opts.gaugeBaselinePx > 0)) throw std::invalid_argument("CKeyframeSmoother: gaugeBaselinePx must be > 0");
   if (m_opts.minViews < 2) throw std::invalid_argument("CKeyframeSmoother: minViews must be >= 2");
   if (!m_opts.synchronous) m_thread = std::thread([this] { run(); });
 }
@@ -149,20 +149,21 @@ void CKeyframeSmoother::finish()
   if (m_thread.joinable()) m_thread.join();
 }
 
-std::vector<double> CKeyframeSmoother::parallaxPx(const TKeyframe& kf, const TSmootherFrame& frame) const
+std::vector<double> CKeyframeSmoother::parallaxPx(const core::TStampedPose& poseA, const std::vector<TSmootherMatch>& a,
+                                              const core::TStampedPose& poseB, const std::vector<TSmootherMatch>& b) const
 {
-  // Chain rule of the bearings: b_C = R_C_W R_W_K b_K for a point at infinity (no parallax).
-  const Mat3 R_C_K = math::quatToRotation(frame.pose.q_W_C).transpose() * math::quatToRotation(kf.pub.filterPose.q_W_C);
-  std::unordered_map<std::int64_t, Vec2> atKeyframe;
-  for (const auto& m : kf.matches) atKeyframe.emplace(m.featureId, m.xn);
+  // Chain rule of the bearings: b_B = R_B_W R_W_A b_A for a point at infinity (no parallax).
+  const Mat3 R_B_A = math::quatToRotation(poseB.q_W_C).transpose() * math::quatToRotation(poseA.q_W_C);
+  std::unordered_map<std::int64_t, Vec2> atA;
+  for (const auto& m : a) atA.emplace(m.featureId, m.xn);
   std::vector<double> out;
-  for (const auto& m : frame.matches)
+  for (const auto& m : b)
   {
-    const auto it = atKeyframe.find(m.featureId);
-    if (it == atKeyframe.end()) continue;
-    const Vec3 b = R_C_K * Vec3(it->second.x(), it->second.y(), 1);
-    if (!(b.z() > 0)) continue;
-    out.push_back(std::hypot(m_fx * (m.xn.x() - b.x() / b.z()), m_fy * (m.xn.y() - b.y() / b.z())));
+    const auto it = atA.find(m.featureId);
+    if (it == atA.end()) continue;
+    const Vec3 r = R_B_A * Vec3(it->second.x(), it->second.y(), 1);
+    if (!(r.z() > 0)) continue;
+    out.push_back(std::hypot(m_fx * (m.xn.x() - r.x() / r.z()), m_fy * (m.xn.y() - r.y() / r.z())));
   }
   return out;
 }
@@ -179,56 +180,98 @@ bool CKeyframeSmoother::ingest(TSmootherFrame&& frame)
       isKeyframe = true;
     else
     {
-      const TKeyframe& last = m_keyframes.back();
-      const std::vector<double> parallax = parallaxPx(last, frame);
-      const std::size_t shared = parallax.size();
-      const bool due = static_cast<double>(shared) < m_opts.minOverlap * static_cast<double>(frame.matches.size()) ||
-                       index - last.pub.frame >= m_opts.maxFrameGap;
-      isKeyframe = due && (shared < m_opts.minMatches || eval::median(parallax) >= m_opts.minParallaxPx);
+      const TSmoothedKeyframe& last = m_keyframes.back();
+      const std::vector<double> parallax =
+          parallaxPx(last.filterPose, m_frameMatches[last.frame], frame.pose, frame.matches);
+      isKeyframe = parallax.size() < m_opts.minMatches || eval::median(parallax) >= m_opts.minParallaxPx;
     }
   }
   std::lock_guard<std::mutex> lk(m_mutex);
   m_framePoses.push_back(frame.pose);
+  m_frameMatches.push_back(std::move(frame.matches));
+  m_frameSmoothed.push_back(frame.pose);
+  m_frameRefined.push_back(0);
   ++m_stats.frames;
   if (!isKeyframe)
   {
     m_frameKeyframe.push_back(m_keyframes.empty() ? kNone : m_keyframes.size() - 1);
     return false;
   }
-  TKeyframe kf;
-  kf.pub.frame = index;
-  kf.pub.filterPose = frame.pose;
+  TSmoothedKeyframe kf;
+  kf.frame = index;
+  kf.filterPose = frame.pose;
   // Starts where the last keyframe's smoothed pose and the filter's motion since it put it.
-  kf.pub.smoothedPose = m_keyframes.empty() ? frame.pose
-                                            : carried(m_keyframes.back().pub.smoothedPose,
-                                                      m_keyframes.back().pub.filterPose, frame.pose);
-  kf.matches = std::move(frame.matches);
+  kf.smoothedPose = m_keyframes.empty()
+                        ? frame.pose
+                        : carried(m_keyframes.back().smoothedPose, m_keyframes.back().filterPose, frame.pose);
   m_frameKeyframe.push_back(m_keyframes.size());
-  m_keyframes.push_back(std::move(kf));
+  m_keyframes.push_back(kf);
   ++m_stats.keyframes;
   return true;
 }
 
+std::size_t CKeyframeSmoother::gaugeKeyframe(std::size_t first, std::size_t n) const
+{
+  const TSmoothedKeyframe& newest = m_keyframes[first + n - 1];
+  for (std::size_t k = 0; k + 1 < n; ++k)
+  {
+    const TSmoothedKeyframe& kf = m_keyframes[first + k];
+    const std::vector<double> par =
+        parallaxPx(kf.filterPose, m_frameMatches[kf.frame], newest.filterPose, m_frameMatches[newest.frame]);
+    if (par.size() >= m_opts.minMatches && eval::median(par) >= m_opts.gaugeBaselinePx) return k;
+  }
+  return kNone;
+}
+
 void CKeyframeSmoother::optimiseWindow()
 {
-  const std::size_t n = std::min(m_keyframes.size(), m_opts.windowKeyframes);
-  if (n <= m_opts.heldKeyframes) return;  // nothing free yet
+  // The window: the newest windowKeyframes keyframes; until one window has been optimised, every
+  // keyframe so far (none is left out of the smoothing while the gauge waits for a baseline).
+  const std::size_t n =
+      m_stats.optimisations == 0 ? m_keyframes.size() : std::min(m_keyframes.size(), m_opts.windowKeyframes);
+  if (n < 2) return;
   const std::size_t first = m_keyframes.size() - n;
-  // Held: the oldest heldKeyframes of the window. Until the window has slid past them, those are
-  // the filter's first keyframes as they came: the smoothed trajectory takes the filter's frame and
-  // scale over their span, and keeps it (a pair of early, close keyframes would set a poor scale).
-  const std::size_t held = m_opts.heldKeyframes;
 
-  // The window's problem: its keyframes' smoothed poses, the features measured by minViews of them.
+  // The window's features, and the keyframes before the window that measured them (the anchors,
+  // newest first, at most anchorKeyframes of them): held at their smoothed poses, they tie the
+  // window to the map the earlier windows placed, its frame and scale included, so a feature seen
+  // again is not placed anew.
+  std::map<std::int64_t, std::vector<TBundleObservation>> byFeature;
+  for (std::size_t k = 0; k < n; ++k)
+    for (const auto& m : m_frameMatches[m_keyframes[first + k].frame]) byFeature[m.featureId].push_back({k, 0, m.xn});
+  std::vector<std::size_t> anchors;  // keyframe indices, newest first
+  for (std::size_t j = first; j-- > 0 && anchors.size() < m_opts.anchorKeyframes;)
+  {
+    const auto& matches = m_frameMatches[m_keyframes[j].frame];
+    if (std::any_of(matches.begin(), matches.end(), [&](const TSmootherMatch& m) { return byFeature.count(m.featureId); }))
+      anchors.push_back(j);
+  }
+  // Without two anchors (the run's first windows, a new map after a loss) the window holds its own
+  // gauge: its earliest keyframe that sees the newest one with gaugeBaselinePx of parallax is held,
+  // and the distance between the two stays as the keyframes' current poses have it (the scale
+  // continues the smoothed poses before, or the filter's at the start). Only the scale is taken
+  // from those poses: the direction of the baseline and every other pose are the images'.
+  std::size_t held = kNone;
+  if (anchors.size() < 2)
+  {
+    held = gaugeKeyframe(first, n);
+    if (held == kNone) return;  // no baseline yet: the images cannot fix the window's scale
+  }
+
+  // The problem: the window's keyframes (0..n-1), then the anchors; the features measured by
+  // minViews of them.
   TBundleProblem p;
   p.fx = m_fx;
   p.fy = m_fy;
-  std::map<std::int64_t, std::vector<TBundleObservation>> byFeature;
-  for (std::size_t k = 0; k < n; ++k)
+  for (std::size_t k = 0; k < n; ++k) p.poses.push_back(m_keyframes[first + k].smoothedPose);
+  for (std::size_t a = 0; a < anchors.size(); ++a)
   {
-    const TKeyframe& kf = m_keyframes[first + k];
-    p.poses.push_back(kf.pub.smoothedPose);
-    for (const auto& m : kf.matches) byFeature[m.featureId].push_back({k, 0, m.xn});
+    p.poses.push_back(m_keyframes[anchors[a]].smoothedPose);
+    for (const auto& m : m_frameMatches[m_keyframes[anchors[a]].frame])
+    {
+      const auto it = byFeature.find(m.featureId);
+      if (it != byFeature.end()) it->second.push_back({n + a, 0, m.xn});
+    }
   }
   for (auto& [id, obs] : byFeature)
   {
@@ -244,31 +287,71 @@ void CKeyframeSmoother::optimiseWindow()
   TBundleOptions bo;
   bo.huberPx = m_opts.huberPx;
   bo.maxIterations = m_opts.maxIterations;
-  for (std::size_t k = 0; k < held; ++k) bo.heldPoses.push_back(k);
+  for (std::size_t a = 0; a < anchors.size(); ++a) bo.heldPoses.push_back(n + a);
+  if (held != kNone)
+  {
+    bo.heldPoses.push_back(held);
+    bo.scalePoses = {held, n - 1};
+  }
   bundleAdjust(p, bo);
 
-  std::lock_guard<std::mutex> lk(m_mutex);
-  ++m_stats.optimisations;
-  for (std::size_t k = held; k < n; ++k)
   {
-    TSmoothedKeyframe& pub = m_keyframes[first + k].pub;
-    pub.smoothedPose = p.poses[k];
-    if (!pub.optimised)
+    std::lock_guard<std::mutex> lk(m_mutex);
+    ++m_stats.optimisations;
+    for (std::size_t k = 0; k < n; ++k)
     {
-      pub.optimised = true;
-      // Frames given by now, counted from the keyframe's own frame.
-      m_stats.lagFrames.push_back(static_cast<double>(m_given - 1 - pub.frame));
+      if (k == held) continue;
+      TSmoothedKeyframe& kf = m_keyframes[first + k];
+      kf.smoothedPose = p.poses[k];
+      if (!kf.optimised)
+      {
+        kf.optimised = true;
+        // Frames given by now, counted from the keyframe's own frame.
+        m_stats.lagFrames.push_back(static_cast<double>(m_given - 1 - kf.frame));
+      }
     }
+  }
+  refineFrames(m_keyframes[first].frame, p);
+}
+
+void CKeyframeSmoother::refineFrames(std::size_t firstFrame, const TBundleProblem& window)
+{
+  // Motion-only: each frame between keyframes refined against the window's points, held (the frame
+  // measures them; its pose alone is free), from its keyframe's pose and the filter's motion since.
+  std::unordered_map<std::int64_t, std::size_t> pointOf;
+  for (std::size_t j = 0; j < window.featureIds.size(); ++j) pointOf.emplace(window.featureIds[j], j);
+  const std::size_t nFrames = m_framePoses.size();
+  for (std::size_t i = firstFrame; i < nFrames; ++i)
+  {
+    const std::size_t k = m_frameKeyframe[i];
+    if (k == kNone || m_keyframes[k].frame == i) continue;  // a keyframe: the window placed it
+    TBundleProblem f;
+    f.fx = window.fx;
+    f.fy = window.fy;
+    f.poses.push_back(carried(m_keyframes[k].smoothedPose, m_keyframes[k].filterPose, m_framePoses[i]));
+    for (const auto& m : m_frameMatches[i])
+    {
+      const auto it = pointOf.find(m.featureId);
+      if (it == pointOf.end()) continue;
+      f.obs.push_back({0, f.points.size(), m.xn});
+      f.points.push_back(window.points[it->second]);
+    }
+    if (f.obs.size() < m_opts.minMatches) continue;
+    TBundleOptions bo;
+    bo.huberPx = m_opts.huberPx;
+    bo.maxIterations = 10;
+    bo.holdPoints = true;
+    bundleAdjust(f, bo);
+    std::lock_guard<std::mutex> lk(m_mutex);
+    m_frameSmoothed[i] = f.poses[0];
+    m_frameRefined[i] = 1;
   }
 }
 
 std::vector<TSmoothedKeyframe> CKeyframeSmoother::keyframes() const
 {
   std::lock_guard<std::mutex> lk(m_mutex);
-  std::vector<TSmoothedKeyframe> out;
-  out.reserve(m_keyframes.size());
-  for (const auto& k : m_keyframes) out.push_back(k.pub);
-  return out;
+  return m_keyframes;
 }
 
 core::TTrajectory CKeyframeSmoother::trajectory() const
@@ -279,10 +362,12 @@ core::TTrajectory CKeyframeSmoother::trajectory() const
   for (std::size_t i = 0; i < m_framePoses.size(); ++i)
   {
     const std::size_t k = m_frameKeyframe[i] != kNone ? m_frameKeyframe[i] : 0;
-    if (m_keyframes.empty())
+    if (m_frameRefined[i])
+      out.push_back(m_frameSmoothed[i]);
+    else if (m_keyframes.empty())
       out.push_back(m_framePoses[i]);
     else
-      out.push_back(carried(m_keyframes[k].pub.smoothedPose, m_keyframes[k].pub.filterPose, m_framePoses[i]));
+      out.push_back(carried(m_keyframes[k].smoothedPose, m_keyframes[k].filterPose, m_framePoses[i]));
   }
   return out;
 }

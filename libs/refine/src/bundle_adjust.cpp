@@ -33,6 +33,24 @@ struct TReprojectionCost
   }
 };
 
+/** The distance from a fixed centre c0 to a pose's centre -R_CW^T t_CW, held at d by a stiff
+ * residual (the scale gauge of a window). */
+struct TDistanceCost
+{
+  Vec3 c0;
+  double d, weight;
+
+  template <typename T>
+  bool operator()(const T* q_CW, const T* t_CW, T* r) const
+  {
+    const Eigen::Map<const Eigen::Quaternion<T>> q(q_CW);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(t_CW);
+    const Eigen::Matrix<T, 3, 1> c = -(q.conjugate() * t);
+    r[0] = T(weight) * ((c - c0.cast<T>()).norm() - T(d));
+    return true;
+  }
+};
+
 /** A pose as Ceres parameter blocks (camera from world). */
 struct TPoseBlocks
 {
@@ -114,15 +132,30 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
   }
   for (auto& b : poses)
     if (problem.HasParameterBlock(b.q)) problem.SetManifold(b.q, &quaternion);
-  for (const std::size_t k : heldPoses(p, used, opts.heldPoses))
+  if (opts.holdPoints)
+    for (auto& x : X)
+      if (problem.HasParameterBlock(x.data())) problem.SetParameterBlockConstant(x.data());
+  for (const std::size_t k : opts.holdPoints ? opts.heldPoses : heldPoses(p, used, opts.heldPoses))
     if (problem.HasParameterBlock(poses[k].q))
     {
       problem.SetParameterBlockConstant(poses[k].q);
       problem.SetParameterBlockConstant(poses[k].t);
     }
 
+  if (opts.scalePoses.size() == 2 && problem.HasParameterBlock(poses[opts.scalePoses[1]].q))
+  {
+    const Vec3 c0 = p.poses[opts.scalePoses[0]].p_W_C;
+    const double d = (p.poses[opts.scalePoses[1]].p_W_C - c0).norm();
+    if (d > 0)
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TDistanceCost, 1, 4, 3>(
+                                   new TDistanceCost{c0, d, 1e3 * p.fx / d}),
+                               nullptr, poses[opts.scalePoses[1]].q, poses[opts.scalePoses[1]].t);
+  }
   ceres::Solver::Options so;
-  so.linear_solver_type = p.poses.size() <= 60 || !ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE)
+  const bool sparse = ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE);
+  // Held points leave no point block to eliminate: the normal equations are block diagonal.
+  so.linear_solver_type = opts.holdPoints ? (p.poses.size() <= 2 || !sparse ? ceres::DENSE_QR : ceres::SPARSE_NORMAL_CHOLESKY)
+                          : p.poses.size() <= 60 || !sparse
                               ? ceres::DENSE_SCHUR
                               : ceres::SPARSE_SCHUR;
   so.max_num_iterations = opts.maxIterations;

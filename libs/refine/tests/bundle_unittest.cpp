@@ -208,3 +208,45 @@ TEST(Reprojection, CeresReachesTheCostOfTheFormerSolver)
   EXPECT_NEAR(ra.finalCost, 0.451528991, 1e-8);
   EXPECT_TRUE(ra.converged);
 }
+
+TEST(Reprojection, HeldPointsRefineEachPoseAlone)
+{
+  // Points at the truth and held: every pose, started bent, reaches the minimum a start at its true
+  // pose reaches, on its own (no gauge needed, none held), and the points do not move.
+  const TScene s = makeScene();
+  const auto cam = pinhole();
+  const auto rows = measure(s, *cam, 0.2);
+  TBundleProblem p = makeBundleProblem(rows, bend(s.poses, 2.0), *cam, 1e-4, 8);
+  TBundleProblem q = makeBundleProblem(rows, s.poses, *cam, 1e-4, 8);
+  for (std::size_t j = 0; j < p.points.size(); ++j)
+    p.points[j] = q.points[j] = s.points[static_cast<std::size_t>(p.featureIds[j] - 100)];  // measure(): id 100 + j
+  const std::vector<Vec3> points = p.points;
+  TBundleOptions o;
+  o.holdPoints = true;
+  bundleAdjust(p, o);
+  bundleAdjust(q, o);
+  for (std::size_t j = 0; j < points.size(); ++j) EXPECT_EQ(p.points[j], points[j]);
+  ASSERT_EQ(p.poses.size(), s.poses.size());
+  for (std::size_t i = 0; i < p.poses.size(); ++i)
+  {
+    EXPECT_LT((p.poses[i].p_W_C - q.poses[i].p_W_C).norm(), 1e-6) << i;
+    EXPECT_LT((p.poses[i].p_W_C - s.poses[i].p_W_C).norm(), 0.01) << i;
+  }
+}
+
+TEST(Reprojection, AScaleGaugeKeepsTheDistanceBetweenTwoPoses)
+{
+  // Pose 0 held and the distance to the last pose kept (TBundleOptions::scalePoses): the refinement
+  // recovers the true trajectory up to the scale the two poses had, in the frame of pose 0.
+  const TScene s = makeScene();
+  const auto cam = pinhole();
+  TBundleProblem p = makeBundleProblem(measure(s, *cam, 0.2), bend(s.poses, 3.0), *cam, 1e-4, 8);
+  const std::size_t last = p.poses.size() - 1;
+  const double d0 = (p.poses[last].p_W_C - p.poses[0].p_W_C).norm();
+  TBundleOptions o;
+  o.heldPoses = {0};
+  o.scalePoses = {0, last};
+  bundleAdjust(p, o);
+  EXPECT_NEAR((p.poses[last].p_W_C - p.poses[0].p_W_C).norm(), d0, 1e-6 * d0);
+  EXPECT_LT(rmsAfterSim3(p.poses, s.poses), 0.005);
+}

@@ -52,22 +52,25 @@ struct TSmootherStats
 };
 
 /** Sliding-window keyframe smoother (a fixed-lag bundle adjustment, Triggs et al. 2000, over the
- * filter's own matches).
+ * filter's own matches, in the manner of a visual odometry's local bundle adjustment).
  *
- * Keyframes: the first frame with at least TOptions::minMatches matches, then a frame when fewer
- * than TOptions::minOverlap of its matches were measured at the last keyframe (the view has
- * changed), or TOptions::maxFrameGap frames after it, provided the features it shares with the last
- * keyframe moved by TOptions::minParallaxPx once the filter's rotation is taken out (or it shares
- * fewer than minMatches: the view is new). A new keyframe starts at the last keyframe's smoothed pose
- * composed with the filter's relative motion between the two.
+ * Keyframes: the first frame with at least TOptions::minMatches matches, then every frame whose
+ * features shared with the last keyframe moved by TOptions::minParallaxPx (median, once the filter's
+ * rotation between the two is taken out), or that shares fewer than minMatches with it (the view is
+ * new): a camera at rest or panning adds no keyframe. A new keyframe starts at the last keyframe's
+ * smoothed pose composed with the filter's relative motion between the two.
  *
- * Window: the last TOptions::windowKeyframes keyframes; every feature measured by at least
- * TOptions::minViews of them is triangulated from the current poses (triangulateAll()), then poses
- * and points are bundle-adjusted (bundleAdjust(), Huber cost); the TOptions::heldKeyframes oldest
- * keyframes of the window hold the gauge, their scale included, so the window continues the frame
- * and scale of the keyframes before it (over the span of many keyframes: a pair of close ones would
- * relay the scale poorly). Until the window has slid past them, the held ones are the filter's first
- * keyframes as they came. A keyframe leaving the window keeps its last smoothed pose.
+ * Window: the last TOptions::windowKeyframes keyframes (every keyframe so far until a first window
+ * has been optimised), and the anchors: up to TOptions::anchorKeyframes keyframes before the window
+ * that measured its features, newest first, held at their smoothed poses (they tie the window to the
+ * map the windows before placed: its frame and scale, and the features it sees again). Every
+ * feature measured by TOptions::minViews of those keyframes is triangulated from the current poses
+ * (triangulateAll()), then the window's poses and the points are bundle-adjusted (bundleAdjust(),
+ * Huber cost). A window with fewer than two anchors (the run's start, a new map) holds its own gauge:
+ * its earliest keyframe that sees the newest with TOptions::gaugeBaselinePx of parallax is held and
+ * the distance between the two kept (TBundleOptions::scalePoses); without such a pair it waits.
+ * A keyframe leaving the window keeps its last smoothed pose. Then every frame of the window that is
+ * not a keyframe is refined alone against the window's points, held (a motion-only adjustment).
  *
  * Threads: addFrame() only moves the frame into a queue under a mutex; a worker thread takes the
  * queued frames one by one, picks keyframes and optimises the window at every keyframe (skipped
@@ -79,14 +82,17 @@ class CKeyframeSmoother
   struct TOptions
   {
     std::size_t windowKeyframes = 20;  ///< keyframes optimised together
-    std::size_t heldKeyframes = 5;     ///< oldest keyframes of the window held fixed (gauge and scale)
-    double minOverlap = 0.7;           ///< a new keyframe when less of a frame's matches were at the last one
-    std::size_t maxFrameGap = 3;       ///< a new keyframe at most this many frames after the last one
+    /** Keyframes before the window that measured its features, held in its optimisation (newest
+     * first): the window continues the map of the windows before it. */
+    std::size_t anchorKeyframes = 40;
+    /** A frame becomes a keyframe when its features moved this much since the last keyframe once
+     * the rotation is taken out (median, pixels): a fraction of the measurement noise, so nearly
+     * every frame of a translating camera is one and a camera at rest or panning adds none. */
+    double minParallaxPx = 0.25;
+    /** The gauge of a window without anchors: a pair of its keyframes with this median parallax
+     * (pixels) between them, the older held and the distance kept. */
+    double gaugeBaselinePx = 10;
     std::size_t minMatches = 8;        ///< a frame with fewer matches is never a keyframe
-    /** A frame sharing features with the last keyframe becomes one only if their median parallax
-     * (bearing change once the filter's rotation is taken out, pixels) reaches this: a camera at rest
-     * or panning adds no keyframe whose position the images could not fix. */
-    double minParallaxPx = 1;
     int minViews = 3;                  ///< keyframes that must measure a feature for it to enter the window
     double huberPx = 2;                ///< Huber threshold of the cost (pixels)
     int maxIterations = 15;            ///< Levenberg-Marquardt iterations per window optimisation
@@ -115,29 +121,31 @@ class CKeyframeSmoother
   /** Processes every queued frame, runs the last window optimisation, stops the worker. */
   void finish();
 
-  /** Every frame given, smoothed: its keyframe's (the last one at or before it, or the first
-   * keyframe) smoothed pose composed with the filter's motion from that keyframe. The filter's
-   * poses when there is no keyframe. Call after finish(). */
+  /** Every frame given, smoothed: a keyframe's smoothed pose; another frame's pose refined against
+   * the points of the last window that covered it, or else its keyframe's (the last one at or
+   * before it, or the first keyframe) smoothed pose composed with the filter's motion from that
+   * keyframe. The filter's poses when there is no keyframe. Call after finish(). */
   core::TTrajectory trajectory() const;
 
   /** Lag and CPU time so far. */
   TSmootherStats stats() const;
 
  private:
-  struct TKeyframe
-  {
-    TSmoothedKeyframe pub;
-    std::vector<TSmootherMatch> matches;
-  };
-
   void run();
   /** Picks keyframes among `frame`; \return true if it became one. Worker or synchronous caller. */
   bool ingest(TSmootherFrame&& frame);
-  /** Per feature `frame` shares with `kf`: its bearing change once the filter's rotation between
-   * the two is taken out (pixels). */
-  std::vector<double> parallaxPx(const TKeyframe& kf, const TSmootherFrame& frame) const;
+  /** Per feature frame B (pose, matches) shares with frame A: its bearing change once the filter's
+   * rotation between the two is taken out (pixels). */
+  std::vector<double> parallaxPx(const core::TStampedPose& poseA, const std::vector<TSmootherMatch>& a,
+                                 const core::TStampedPose& poseB, const std::vector<TSmootherMatch>& b) const;
+  /** The window's keyframe (index from `first`) held as its gauge: the earliest that sees the
+   * newest one with gaugeBaselinePx of parallax; npos if none. */
+  std::size_t gaugeKeyframe(std::size_t first, std::size_t n) const;
   /** Bundle-adjusts the window and publishes its poses. */
   void optimiseWindow();
+  /** Every frame from `firstFrame` on that is not a keyframe: its pose refined against the
+   * window's points (held), from its keyframe's smoothed pose composed with the filter's motion. */
+  void refineFrames(std::size_t firstFrame, const TBundleProblem& window);
 
   TOptions m_opts;
   double m_fx, m_fy;
@@ -147,8 +155,11 @@ class CKeyframeSmoother
   std::deque<TSmootherFrame> m_queue;     ///< frames handed over, not yet ingested
   bool m_stop = false, m_finished = false;
   std::vector<core::TStampedPose> m_framePoses;  ///< the filter's pose of every ingested frame
+  std::vector<std::vector<TSmootherMatch>> m_frameMatches;  ///< the matches of every ingested frame
+  std::vector<core::TStampedPose> m_frameSmoothed;  ///< per frame: refined against a window's points
+  std::vector<char> m_frameRefined;                 ///< m_frameSmoothed[i] holds such a pose
   std::vector<std::size_t> m_frameKeyframe;      ///< index into m_keyframes (or npos: none yet)
-  std::vector<TKeyframe> m_keyframes;
+  std::vector<TSmoothedKeyframe> m_keyframes;
   std::size_t m_given = 0;                ///< frames given to addFrame()
   TSmootherStats m_stats;
   std::thread m_thread;

@@ -20,6 +20,12 @@ struct TBundleOptions
    * (firstPoseOfEachComponent()). Otherwise these, plus the first pose of every component that
    * holds none of them. Holding two poses of a component fixes its scale as well. */
   std::vector<std::size_t> heldPoses;
+  /** Every point held fixed: a motion-only adjustment, each pose refined against the points on its
+   * own; no pose is then held beyond heldPoses (the points hold the gauge). */
+  bool holdPoints = false;
+  /** Scale gauge: the distance between the centres of pose scalePoses[0] (held) and scalePoses[1]
+   * (otherwise free) stays as given, by a stiff residual. Empty: none. */
+  std::vector<std::size_t> scalePoses;
 };
 
 /** What a bundle adjustment did. */
