@@ -11,7 +11,10 @@
 # Usage: share/experiments/smoother-eval.sh [--build DIR] [--out DIR] [--seeds LIST] [--data DIR]
 #        (defaults: build, /tmp/smoother-eval, 101-120, $IMMSLAM_SHARED_DATA_DIR or ../shared/data;
 #        LIST as 101-140 or 7,11,23; share/experiments/args.sh)
-# Environment: CONFIG (default ini/imm7-shadow.ini), SET (extra imm-monoslam options).
+# Environment: CONFIG (default ini/imm7-shadow.ini), SET (extra imm-monoslam options), VISP_REF and
+# TESTSEQ_REF (reference trajectories to use instead: the COLMAP reconstructions of
+# share/experiments/make-reference.sh, doc/experiments/references.md), STATIC_SCENARIO (default
+# ini/scenarios/holdout/pause-pan-movers.ini).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 source share/experiments/args.sh
@@ -43,22 +46,26 @@ printf '%-22s %-24s %-24s %-24s %s\n' input 'filter path/extent %' 'smoothed pat
 # visp_rbt against its ground truth.
 o="$OUT/visp_rbt"
 run "$CONFIG" "$DATA/visp_rbt" "$o"
-gt="$DATA/visp_rbt/groundtruth.txt"
+gt="${VISP_REF:-$DATA/visp_rbt/groundtruth.txt}"
 printf '%-22s %-24s %-24s %-24s %s\n' visp_rbt "$(ate "$o/trajectory.txt" "$gt")" \
   "$(ate "$o/trajectory_smoothed.txt" "$gt")" "$(ate "$o/trajectory_refined.txt" "$gt")" "$(timing "$o.log")"
 # monoslam_testseq against the refinement of an independent run (single model).
-ref="$OUT/testseq_single_reference"
-run ini/single.ini "$DATA/monoslam_testseq" "$ref"
+if [ -n "${TESTSEQ_REF:-}" ]; then
+  r=$TESTSEQ_REF
+else
+  ref="$OUT/testseq_single_reference"
+  run ini/single.ini "$DATA/monoslam_testseq" "$ref"
+  r="$ref/trajectory_refined.txt"
+fi
 o="$OUT/testseq"
 run "$CONFIG" "$DATA/monoslam_testseq" "$o"
-r="$ref/trajectory_refined.txt"
 printf '%-22s %-24s %-24s %-24s %s\n' monoslam_testseq "$(ate "$o/trajectory.txt" "$r")" \
   "$(ate "$o/trajectory_smoothed.txt" "$r")" "$(ate "$o/trajectory_refined.txt" "$r")" "$(timing "$o.log")"
 # Hold-out seeds, static world.
 rows=$(mktemp); trap 'rm -f "$rows"' EXIT
 for s in "${SEEDS[@]}"; do
   d="$OUT/holdout-static-$s"
-  [ -f "$d/rgb.txt" ] || "$BUILD/bin/imm-render" ini/scenarios/holdout/pause-pan-movers.ini "$d" --seed "$s" \
+  [ -f "$d/rgb.txt" ] || "$BUILD/bin/imm-render" "${STATIC_SCENARIO:-ini/scenarios/holdout/pause-pan-movers.ini}" "$d" --seed "$s" \
     --set objects.enabled=false > /dev/null
   o="$OUT/out-holdout-static-$s"
   run "$CONFIG" "$d" "$o" || true
