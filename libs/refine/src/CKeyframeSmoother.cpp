@@ -223,15 +223,8 @@ std::size_t CKeyframeSmoother::gaugeKeyframe(std::size_t first, std::size_t n) c
   return kNone;
 }
 
-void CKeyframeSmoother::optimiseWindow()
+TBundleProblem CKeyframeSmoother::windowProblem(std::size_t first, std::size_t n, std::vector<std::size_t>& anchors) const
 {
-  // The window: the newest windowKeyframes keyframes; until one window has been optimised, every
-  // keyframe so far (none is left out of the smoothing while the gauge waits for a baseline).
-  const std::size_t n =
-      m_stats.optimisations == 0 ? m_keyframes.size() : std::min(m_keyframes.size(), m_opts.windowKeyframes);
-  if (n < 2) return;
-  const std::size_t first = m_keyframes.size() - n;
-
   // The window's features, and the keyframes before the window that measured them (the anchors,
   // newest first, at most anchorKeyframes of them): held at their smoothed poses, they tie the
   // window to the map the earlier windows placed, its frame and scale included, so a feature seen
@@ -239,27 +232,15 @@ void CKeyframeSmoother::optimiseWindow()
   std::map<std::int64_t, std::vector<TBundleObservation>> byFeature;
   for (std::size_t k = 0; k < n; ++k)
     for (const auto& m : m_frameMatches[m_keyframes[first + k].frame]) byFeature[m.featureId].push_back({k, 0, m.xn});
-  std::vector<std::size_t> anchors;  // keyframe indices, newest first
+  anchors.clear();
   for (std::size_t j = first; j-- > 0 && anchors.size() < m_opts.anchorKeyframes;)
   {
     const auto& matches = m_frameMatches[m_keyframes[j].frame];
     if (std::any_of(matches.begin(), matches.end(), [&](const TSmootherMatch& m) { return byFeature.count(m.featureId); }))
       anchors.push_back(j);
   }
-  // Without two anchors (the run's first windows, a new map after a loss) the window holds its own
-  // gauge: its earliest keyframe that sees the newest one with gaugeBaselinePx of parallax is held,
-  // and the distance between the two stays as the keyframes' current poses have it (the scale
-  // continues the smoothed poses before, or the filter's at the start). Only the scale is taken
-  // from those poses: the direction of the baseline and every other pose are the images'.
-  std::size_t held = kNone;
-  if (anchors.size() < 2)
-  {
-    held = gaugeKeyframe(first, n);
-    if (held == kNone) return;  // no baseline yet: the images cannot fix the window's scale
-  }
-
   // The problem: the window's keyframes (0..n-1), then the anchors; the features measured by
-  // minViews of them.
+  // minViews of them, triangulated from the current poses.
   TBundleProblem p;
   p.fx = m_fx;
   p.fy = m_fy;
@@ -280,9 +261,33 @@ void CKeyframeSmoother::optimiseWindow()
     p.featureIds.push_back(id);
     p.obs.insert(p.obs.end(), obs.begin(), obs.end());
   }
-  if (p.featureIds.empty()) return;
   p.points.assign(p.featureIds.size(), Vec3::Zero());
-  triangulateAll(p);
+  if (!p.featureIds.empty()) triangulateAll(p);
+  return p;
+}
+
+void CKeyframeSmoother::optimiseWindow()
+{
+  // The window: the newest windowKeyframes keyframes; until one window has been optimised, every
+  // keyframe so far (none is left out of the smoothing while the gauge waits for a baseline).
+  const std::size_t n =
+      m_stats.optimisations == 0 ? m_keyframes.size() : std::min(m_keyframes.size(), m_opts.windowKeyframes);
+  if (n < 2) return;
+  const std::size_t first = m_keyframes.size() - n;
+  std::vector<std::size_t> anchors;
+  TBundleProblem p = windowProblem(first, n, anchors);
+  if (p.featureIds.empty()) return;
+  // Without two anchors (the run's first windows, a new map after a loss) the window holds its own
+  // gauge: its earliest keyframe that sees the newest one with gaugeBaselinePx of parallax is held,
+  // and the distance between the two stays as the keyframes' current poses have it (the scale
+  // continues the smoothed poses before, or the filter's at the start). Only the scale is taken
+  // from those poses: the direction of the baseline and every other pose are the images'.
+  std::size_t held = kNone;
+  if (anchors.size() < 2)
+  {
+    held = gaugeKeyframe(first, n);
+    if (held == kNone) return;  // no baseline yet: the images cannot fix the window's scale
+  }
 
   TBundleOptions bo;
   bo.huberPx = m_opts.huberPx;

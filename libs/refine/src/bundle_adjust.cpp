@@ -87,6 +87,24 @@ std::vector<std::size_t> heldPoses(const TBundleProblem& p, const std::vector<ch
   return {held.begin(), held.end()};
 }
 
+ceres::Solver::Options solverOptions(std::size_t nPoses, const TBundleOptions& opts)
+{
+  ceres::Solver::Options so;
+  const bool sparse = ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE);
+  // Held points leave no point block to eliminate: the normal equations are block diagonal.
+  if (opts.holdPoints)
+    so.linear_solver_type = nPoses <= 2 || !sparse ? ceres::DENSE_QR : ceres::SPARSE_NORMAL_CHOLESKY;
+  else
+    so.linear_solver_type = nPoses <= 60 || !sparse ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
+  so.max_num_iterations = opts.maxIterations;
+  so.function_tolerance = 1e-10;
+  so.gradient_tolerance = 1e-12;
+  so.parameter_tolerance = 1e-10;
+  so.num_threads = 1;
+  so.logging_type = ceres::SILENT;
+  return so;
+}
+
 double huberCost(double n, double k) { return n <= k ? n * n : 2 * k * n - k * k; }
 }  // namespace
 
@@ -151,21 +169,8 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
                                    new TDistanceCost{c0, d, 1e3 * p.fx / d}),
                                nullptr, poses[opts.scalePoses[1]].q, poses[opts.scalePoses[1]].t);
   }
-  ceres::Solver::Options so;
-  const bool sparse = ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE);
-  // Held points leave no point block to eliminate: the normal equations are block diagonal.
-  so.linear_solver_type = opts.holdPoints ? (p.poses.size() <= 2 || !sparse ? ceres::DENSE_QR : ceres::SPARSE_NORMAL_CHOLESKY)
-                          : p.poses.size() <= 60 || !sparse
-                              ? ceres::DENSE_SCHUR
-                              : ceres::SPARSE_SCHUR;
-  so.max_num_iterations = opts.maxIterations;
-  so.function_tolerance = 1e-10;
-  so.gradient_tolerance = 1e-12;
-  so.parameter_tolerance = 1e-10;
-  so.num_threads = 1;
-  so.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
+  ceres::Solve(solverOptions(p.poses.size(), opts), &problem, &summary);
 
   res.iterations = static_cast<int>(summary.iterations.size()) - 1;
   res.converged = summary.termination_type == ceres::CONVERGENCE;

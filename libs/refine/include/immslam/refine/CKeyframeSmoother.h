@@ -141,6 +141,9 @@ class CKeyframeSmoother
   /** The window's keyframe (index from `first`) held as its gauge: the earliest that sees the
    * newest one with gaugeBaselinePx of parallax; npos if none. */
   std::size_t gaugeKeyframe(std::size_t first, std::size_t n) const;
+  /** The bundle problem of the window of n keyframes from `first` with its anchors (returned in
+   * `anchors`, keyframe indices, newest first; their poses follow the window's). */
+  TBundleProblem windowProblem(std::size_t first, std::size_t n, std::vector<std::size_t>& anchors) const;
   /** Bundle-adjusts the window and publishes its poses. */
   void optimiseWindow();
   /** Every frame from `firstFrame` on that is not a keyframe: its pose refined against the
