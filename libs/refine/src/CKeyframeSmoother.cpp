@@ -206,6 +206,7 @@ bool CKeyframeSmoother::ingest(TSmootherFrame&& frame)
                         : carried(m_keyframes.back().smoothedPose, m_keyframes.back().filterPose, frame.pose);
   m_frameKeyframe.push_back(m_keyframes.size());
   m_keyframes.push_back(kf);
+  m_placed.push_back(0);
   ++m_stats.keyframes;
   return true;
 }
@@ -235,6 +236,7 @@ TBundleProblem CKeyframeSmoother::windowProblem(std::size_t first, std::size_t n
   anchors.clear();
   for (std::size_t j = first; j-- > 0 && anchors.size() < m_opts.anchorKeyframes;)
   {
+    if (!m_placed[j]) continue;  // skipped by a worker behind: its pose is the filter's, carried
     const auto& matches = m_frameMatches[m_keyframes[j].frame];
     if (std::any_of(matches.begin(), matches.end(), [&](const TSmootherMatch& m) { return byFeature.count(m.featureId); }))
       anchors.push_back(j);
@@ -268,10 +270,16 @@ TBundleProblem CKeyframeSmoother::windowProblem(std::size_t first, std::size_t n
 
 void CKeyframeSmoother::optimiseWindow()
 {
-  // The window: the newest windowKeyframes keyframes; until one window has been optimised, every
-  // keyframe so far (none is left out of the smoothing while the gauge waits for a baseline).
-  const std::size_t n =
-      m_stats.optimisations == 0 ? m_keyframes.size() : std::min(m_keyframes.size(), m_opts.windowKeyframes);
+  // The window: the newest windowKeyframes keyframes, and back to the oldest keyframe no window has
+  // placed yet (a worker that skipped windows catches up on them, up to twice the window); until
+  // one window has been optimised, every keyframe so far (none is left out of the smoothing while
+  // the gauge waits for a baseline).
+  std::size_t unplaced = 0;  // keyframes since the newest placed one
+  while (unplaced < m_keyframes.size() && !m_placed[m_keyframes.size() - 1 - unplaced]) ++unplaced;
+  const std::size_t n = m_stats.optimisations == 0
+                            ? m_keyframes.size()
+                            : std::min(m_keyframes.size(), std::max(m_opts.windowKeyframes,
+                                                                    std::min(unplaced + 1, 2 * m_opts.windowKeyframes)));
   if (n < 2) return;
   const std::size_t first = m_keyframes.size() - n;
   std::vector<std::size_t> anchors;
@@ -305,6 +313,7 @@ void CKeyframeSmoother::optimiseWindow()
     ++m_stats.optimisations;
     for (std::size_t k = 0; k < n; ++k)
     {
+      m_placed[first + k] = 1;
       if (k == held) continue;
       TSmoothedKeyframe& kf = m_keyframes[first + k];
       kf.smoothedPose = p.poses[k];

@@ -74,7 +74,8 @@ struct TSmootherStats
  *
  * Threads: addFrame() only moves the frame into a queue under a mutex; a worker thread takes the
  * queued frames one by one, picks keyframes and optimises the window at every keyframe (skipped
- * while it is behind by more than TOptions::maxBacklogFrames). With TOptions::synchronous,
+ * while it is behind by more than TOptions::maxBacklogFrames; the next window then reaches back over
+ * the keyframes skipped, up to twice its size, and a keyframe no window placed is never an anchor). With TOptions::synchronous,
  * addFrame() does that work itself. Both give the same result while the worker keeps up. */
 class CKeyframeSmoother
 {
@@ -91,7 +92,7 @@ class CKeyframeSmoother
     double minParallaxPx = 0.25;
     /** The gauge of a window without anchors: a pair of its keyframes with this median parallax
      * (pixels) between them, the older held and the distance kept. */
-    double gaugeBaselinePx = 10;
+    double gaugeBaselinePx = 5;
     std::size_t minMatches = 8;        ///< a frame with fewer matches is never a keyframe
     int minViews = 3;                  ///< keyframes that must measure a feature for it to enter the window
     double huberPx = 2;                ///< Huber threshold of the cost (pixels)
@@ -163,6 +164,7 @@ class CKeyframeSmoother
   std::vector<char> m_frameRefined;                 ///< m_frameSmoothed[i] holds such a pose
   std::vector<std::size_t> m_frameKeyframe;      ///< index into m_keyframes (or npos: none yet)
   std::vector<TSmoothedKeyframe> m_keyframes;
+  std::vector<char> m_placed;  ///< per keyframe: in an optimised window (optimised, or held as its gauge)
   std::size_t m_given = 0;                ///< frames given to addFrame()
   TSmootherStats m_stats;
   std::thread m_thread;
