@@ -8,6 +8,7 @@
 #include <immslam/refine/bundle_adjust.h>
 #include <immslam/eval/statistics.h>
 #include <immslam/io/CCsvWriter.h>
+#include <immslam/io/CLiveCameraSource.h>
 #include <immslam/sim/CSyntheticSource.h>
 
 #include <unistd.h>
@@ -201,7 +202,10 @@ void CRefineSink::onEnd(const slam::CMonoSlamIMM&, TRunSummary& summary)
 }
 
 CSmoothingSink::CSmoothingSink(const TRunInputs& in, const COutputFiles& files, mrpt::system::COutputLogger& log)
-    : m_in(in), m_files(files), m_log(log), m_smoothing(*in.cam)
+    : m_in(in),
+      m_files(files),
+      m_log(log),
+      m_smoothing(*in.cam, dynamic_cast<const io::CLiveCameraSource*>(in.source.get()) != nullptr)
 {
 }
 

@@ -9,8 +9,18 @@
 
 namespace immslam::app::detail
 {
-CTrajectorySmoothing::CTrajectorySmoothing(const camera::CCameraModel& cam)
-    : m_cam(cam), m_smoother(refine::CKeyframeSmoother::TOptions{}, cam.fx(), cam.fy())
+namespace
+{
+refine::CKeyframeSmoother::TOptions smootherOptions(bool live)
+{
+  refine::CKeyframeSmoother::TOptions o;
+  o.waitWhenBehind = !live;
+  return o;
+}
+}  // namespace
+
+CTrajectorySmoothing::CTrajectorySmoothing(const camera::CCameraModel& cam, bool live)
+    : m_cam(cam), m_smoother(smootherOptions(live), cam.fx(), cam.fy())
 {
 }
 

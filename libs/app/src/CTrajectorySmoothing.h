@@ -18,8 +18,10 @@ namespace immslam::app::detail
 class CTrajectorySmoothing
 {
  public:
-  /** \param cam the camera that undistorts the matched pixels (kept by reference). */
-  explicit CTrajectorySmoothing(const camera::CCameraModel& cam);
+  /** \param cam the camera that undistorts the matched pixels (kept by reference).
+   * \param live a live camera: the smoother skips windows when behind; otherwise (recorded input)
+   *        the run waits for it (refine::CKeyframeSmoother::TOptions::waitWhenBehind). */
+  CTrajectorySmoothing(const camera::CCameraModel& cam, bool live);
 
   /** One processed frame: the filter's pose and the low-innovation and rescued inliers of its
    * update, as undistorted normalised points. */

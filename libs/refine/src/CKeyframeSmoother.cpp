@@ -91,8 +91,10 @@ void CKeyframeSmoother::addFrame(TSmootherFrame frame)
     return;
   }
   {
-    std::lock_guard<std::mutex> lk(m_mutex);
+    std::unique_lock<std::mutex> lk(m_mutex);
     if (m_stop) throw std::logic_error("CKeyframeSmoother::addFrame after finish()");
+    // A recorded input may wait for the worker: it never falls behind, so it never skips a window.
+    if (m_opts.waitWhenBehind) m_room.wait(lk, [&] { return m_queue.size() < std::max<std::size_t>(1, m_opts.maxBacklogFrames); });
     m_queue.push_back(std::move(frame));
     ++m_given;
   }
@@ -115,6 +117,7 @@ void CKeyframeSmoother::run()
       if (m_queue.empty()) break;  // stopped, and every frame handed over is done
       frame = std::move(m_queue.front());
       m_queue.pop_front();
+      m_room.notify_one();
       backlog = m_queue.size();
     }
     // Frames are taken one by one and the window optimised at every keyframe, as in a synchronous

@@ -101,6 +101,10 @@ class CKeyframeSmoother
      * queue (a later keyframe's optimisation covers it): the lag stays bounded on a slow machine.
      * While it keeps up, the result is that of a synchronous run. */
     std::size_t maxBacklogFrames = 30;
+    /** addFrame() waits while maxBacklogFrames frames are queued instead of letting the worker skip
+     * windows: for recorded input, which would otherwise run ahead of the worker; the result is then
+     * that of a synchronous run. Never for a live camera (the filter must not wait). */
+    bool waitWhenBehind = false;
     int workerNice = 10;               ///< nice value of the worker thread (0: the caller's priority)
     bool synchronous = false;          ///< no thread: addFrame() optimises before it returns
   };
@@ -156,6 +160,7 @@ class CKeyframeSmoother
 
   mutable std::mutex m_mutex;             ///< guards everything below except m_thread
   std::condition_variable m_wake;
+  std::condition_variable m_room;         ///< the worker took a frame (TOptions::waitWhenBehind)
   std::deque<TSmootherFrame> m_queue;     ///< frames handed over, not yet ingested
   bool m_stop = false, m_finished = false;
   std::vector<core::TStampedPose> m_framePoses;  ///< the filter's pose of every ingested frame
