@@ -278,7 +278,7 @@ TEST(SystemOutputs, SmoothedTrajectoryOnlyWhenAskedAndTheFilterUnchanged)
 {
   // [output] smooth_trajectory: trajectory_smoothed.txt, one pose per processed frame, from the
   // keyframe smoother's thread; its ATE, lag and CPU time in the summary; the filter's own outputs
-  // byte-identical to a run without it; not written unless asked.
+  // byte-identical to a run without it; not written unless asked; better than the filter.
   const std::vector<std::string> base{sourceDir() + "/ini/imm7-shadow.ini", "--frames", "120", "--set",
                                       "input.scenario=scenarios/handheld.ini"};
   auto args = base;
@@ -301,8 +301,9 @@ TEST(SystemOutputs, SmoothedTrajectoryOnlyWhenAskedAndTheFilterUnchanged)
               "smoother CPU %.2f s\n",
               100 * s.ate->rmseOverPath, 100 * s.ateSmoothed->rmseOverPath, s.smoothMedianLagFrames,
               s.smoothMaxLagFrames, s.smoothCpuSeconds);
-  // Not an accuracy claim (doc/experiments/smoother.md): only that it stays near the filter.
-  EXPECT_LT(s.ateSmoothed->rmseOverPath, 2 * s.ate->rmseOverPath);
+  // A recorded input waits for the smoother (never skips a window): the result does not depend on
+  // the machine's load. On this path it halves the filter's error (doc/estimator.md).
+  EXPECT_LT(s.ateSmoothed->rmseOverPath, 0.5 * s.ate->rmseOverPath);
   EXPECT_EQ(readFile(plain + "/trajectory.txt"), readFile(smoothed + "/trajectory.txt"));
   EXPECT_EQ(readFile(plain + "/model_probabilities.csv"), readFile(smoothed + "/model_probabilities.csv"));
 }

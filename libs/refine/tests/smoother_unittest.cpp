@@ -129,6 +129,19 @@ TEST(KeyframeSmoother, TheWorkerThreadSmoothesAndStopsCleanly)
   EXPECT_LT(bounded.optimisations, st.optimisations);
   EXPECT_GE(bounded.optimisations, 1u);
   EXPECT_LT(test::rmsAfterSim3(b, s.poses), 1.2 * test::rmsAfterSim3(poses(frames), s.poses));
+  // Waiting instead of skipping (recorded input): the synchronous result, though the worker was
+  // flooded with the same bound.
+  {
+    CKeyframeSmoother::TOptions o = testOptions(false, 5);
+    o.waitWhenBehind = true;
+    CKeyframeSmoother sm(o, kF, kF);
+    for (const auto& f : frames) sm.addFrame(f);
+    sm.finish();
+    const core::TTrajectory w = sm.trajectory();
+    ASSERT_EQ(w.size(), reference.size());
+    for (std::size_t i = 0; i < w.size(); ++i) EXPECT_EQ(w[i].p_W_C, reference[i].p_W_C) << i;
+    EXPECT_EQ(sm.stats().optimisations, st.optimisations);
+  }
   // Destroyed while frames are queued and without finish(): the destructor drains and joins.
   {
     CKeyframeSmoother sm(testOptions(false), kF, kF);
