@@ -26,16 +26,18 @@ namespace immslam::app::detail
 {
 namespace
 {
-/** [output] refine_trajectory: bundle adjustment of the run's own matches (the filter's trajectory as
- * the start), written to trajectory_refined.txt, with its ATE when the input has ground truth. */
-void refineTrajectory(const std::vector<eval::TSearchRow>& rows, const COutputFiles& out,
-                      const camera::CCameraModel& cam, const std::optional<core::TTrajectory>& gt,
-                      TRunSummary& summary, mrpt::system::COutputLogger& log)
+/** [output] refine_trajectory: bundle adjustment of the run's own matches from `start` (the smoothed
+ * trajectory, or the filter's), written to trajectory_refined.txt, with its ATE when the input has
+ * ground truth. */
+void refineTrajectory(const std::vector<eval::TSearchRow>& rows, const core::TTrajectory& start,
+                      const COutputFiles& out, const camera::CCameraModel& cam,
+                      const std::optional<core::TTrajectory>& gt, TRunSummary& summary,
+                      mrpt::system::COutputLogger& log)
 {
   const auto t0 = std::chrono::steady_clock::now();
   try
   {
-    refine::TBundleProblem prob = refine::makeBundleProblem(rows, out.trajectory(), cam, 1e-6, 8, 6);
+    refine::TBundleProblem prob = refine::makeBundleProblem(rows, start, cam, 1e-6, 8, 6);
     const double before = refine::reprojectionStats(prob).rmsPx;
     const refine::TBundleResult r = refine::bundleAdjust(prob);
     const double after = refine::reprojectionStats(prob).rmsPx;
@@ -169,8 +171,9 @@ void CTruthSeriesSink::onEnd(const slam::CMonoSlamIMM&, TRunSummary& summary)
   }
 }
 
-CRefineSink::CRefineSink(const TRunContext& ctx, const TRunInputs& in, const COutputFiles& files)
-    : m_ctx(ctx), m_in(in), m_files(files)
+CRefineSink::CRefineSink(const TRunContext& ctx, const TRunInputs& in, const COutputFiles& files,
+                         const CSmoothingSink* smoothing)
+    : m_ctx(ctx), m_in(in), m_files(files), m_smoothing(smoothing)
 {
 }
 
@@ -198,7 +201,11 @@ void CRefineSink::onFrame(const TFrameResult& r)
 
 void CRefineSink::onEnd(const slam::CMonoSlamIMM&, TRunSummary& summary)
 {
-  refineTrajectory(m_rows, m_files, *m_in.cam, m_in.source->groundTruth(), summary, m_ctx.log);
+  // The smoothed trajectory, where there is one, is the better start: the adjustment reaches the same
+  // minimum from either when the filter is good, and from it where the filter lost its map.
+  const bool smoothed = m_smoothing && m_smoothing->trajectory().size() == m_files.trajectory().size();
+  refineTrajectory(m_rows, smoothed ? m_smoothing->trajectory() : m_files.trajectory(), m_files, *m_in.cam,
+                   m_in.source->groundTruth(), summary, m_ctx.log);
 }
 
 CSmoothingSink::CSmoothingSink(const TRunInputs& in, const COutputFiles& files, mrpt::system::COutputLogger& log)
@@ -252,8 +259,15 @@ CRunOutputs::CRunOutputs(const TRunContext& ctx, const TRunInputs& in, const sys
   const core::TTrajectory& trajectory = m_files->trajectory();
   m_sinks.push_back(std::make_unique<CStatisticsSink>(ctx, in, trajectory));
   m_sinks.push_back(std::make_unique<CTruthSeriesSink>(ctx, in));  // after the statistics: reads the ATE
-  if (in.out.refine_trajectory) m_sinks.push_back(std::make_unique<CRefineSink>(ctx, in, *m_files));
-  if (in.out.smooth_trajectory) m_sinks.push_back(std::make_unique<CSmoothingSink>(in, *m_files, ctx.log));
+  const CSmoothingSink* smoothing = nullptr;
+  if (in.out.smooth_trajectory)
+  {
+    auto sink = std::make_unique<CSmoothingSink>(in, *m_files, ctx.log);
+    smoothing = sink.get();
+    m_sinks.push_back(std::move(sink));
+  }
+  // After the smoothing: it starts from the smoothed trajectory (the sinks end in this order).
+  if (in.out.refine_trajectory) m_sinks.push_back(std::make_unique<CRefineSink>(ctx, in, *m_files, smoothing));
   if (in.out.overlays || in.out.overlay_video) m_sinks.push_back(std::make_unique<COverlaySink>(ctx.args.outDir, in.out));
   if (CLiveView::available(ctx.args.noGui)) m_sinks.push_back(std::make_unique<CLiveViewSink>(in.out, trajectory));
   if (in.out.scene || in.out.scene_every_n > 0) m_sinks.push_back(std::make_unique<CSceneSink>(ctx, in, trajectory));

@@ -46,7 +46,8 @@ void CTrajectorySmoothing::finish(const std::string& path, const std::optional<c
   const auto t0 = std::chrono::steady_clock::now();
   m_smoother.finish();
   const double wait = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const core::TTrajectory traj = m_smoother.trajectory();
+  m_result = m_smoother.trajectory();
+  const core::TTrajectory& traj = m_result;
   core::writeTumTrajectory(traj, path);
   const refine::TSmootherStats st = m_smoother.stats();
   summary.smoothCpuSeconds = st.cpuSeconds;

@@ -32,8 +32,12 @@ class CTrajectorySmoothing
   void finish(const std::string& path, const std::optional<core::TTrajectory>& gt, TRunSummary& summary,
               mrpt::system::COutputLogger& log);
 
+  /** The smoothed trajectory written by finish() (empty before). */
+  const core::TTrajectory& trajectory() const { return m_result; }
+
  private:
   const camera::CCameraModel& m_cam;
   refine::CKeyframeSmoother m_smoother;
+  core::TTrajectory m_result;
 };
 }  // namespace immslam::app::detail

@@ -58,22 +58,6 @@ class CStatisticsSink : public IFrameSink
   std::vector<double> m_frameMs, m_matched;  ///< per processed frame
 };
 
-/** [output] refine_trajectory: the inlier matches of every frame, then trajectory_refined.txt, a
- * bundle adjustment of them started at the filter's trajectory (and its ATE). */
-class CRefineSink : public IFrameSink
-{
- public:
-  CRefineSink(const TRunContext& ctx, const TRunInputs& in, const COutputFiles& files);
-  void onFrame(const TFrameResult& r) override;
-  void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
-
- private:
-  const TRunContext& m_ctx;
-  const TRunInputs& m_in;
-  const COutputFiles& m_files;
-  std::vector<eval::TSearchRow> m_rows;  ///< matches used in the updates
-};
-
 /** [output] smooth_trajectory: the online keyframe smoother (its own thread; this writer only hands
  * each frame's pose and matches over) and trajectory_smoothed.txt at the end. */
 class CSmoothingSink : public IFrameSink
@@ -82,12 +66,33 @@ class CSmoothingSink : public IFrameSink
   CSmoothingSink(const TRunInputs& in, const COutputFiles& files, mrpt::system::COutputLogger& log);
   void onFrame(const TFrameResult& r) override;
   void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
+  /** The smoothed trajectory once onEnd() has run (empty before). */
+  const core::TTrajectory& trajectory() const { return m_smoothing.trajectory(); }
 
  private:
   const TRunInputs& m_in;
   const COutputFiles& m_files;
   mrpt::system::COutputLogger& m_log;
   CTrajectorySmoothing m_smoothing;
+};
+
+/** [output] refine_trajectory: the inlier matches of every frame, then trajectory_refined.txt, a
+ * bundle adjustment of them started at the smoothed trajectory when the run smooths (its sink's
+ * onEnd() must come first), else at the filter's (and its ATE). */
+class CRefineSink : public IFrameSink
+{
+ public:
+  CRefineSink(const TRunContext& ctx, const TRunInputs& in, const COutputFiles& files,
+              const CSmoothingSink* smoothing);
+  void onFrame(const TFrameResult& r) override;
+  void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
+
+ private:
+  const TRunContext& m_ctx;
+  const TRunInputs& m_in;
+  const COutputFiles& m_files;
+  const CSmoothingSink* m_smoothing;     ///< null: the run does not smooth
+  std::vector<eval::TSearchRow> m_rows;  ///< matches used in the updates
 };
 
 /** The progress line on a terminal, at most every 0.2 s (frame, rate, map, matches, dominant model,
