@@ -192,8 +192,7 @@ bool CKeyframeSmoother::ingest(TSmootherFrame&& frame)
   std::lock_guard<std::mutex> lk(m_mutex);
   m_framePoses.push_back(frame.pose);
   m_frameMatches.push_back(std::move(frame.matches));
-  m_frameSmoothed.push_back(frame.pose);
-  m_frameRefined.push_back(0);
+  m_frameRefined.emplace_back();
   ++m_stats.frames;
   if (!isKeyframe)
   {
@@ -345,7 +344,7 @@ void CKeyframeSmoother::refineFrames(std::size_t firstFrame, const TBundleProble
     TBundleProblem f;
     f.fx = window.fx;
     f.fy = window.fy;
-    f.poses.push_back(carried(m_keyframes[k].smoothedPose, m_keyframes[k].filterPose, m_framePoses[i]));
+    f.poses.push_back(composedPose(i));
     for (const auto& m : m_frameMatches[i])
     {
       const auto it = pointOf.find(m.featureId);
@@ -360,8 +359,7 @@ void CKeyframeSmoother::refineFrames(std::size_t firstFrame, const TBundleProble
     bo.holdPoints = true;
     bundleAdjust(f, bo);
     std::lock_guard<std::mutex> lk(m_mutex);
-    m_frameSmoothed[i] = f.poses[0];
-    m_frameRefined[i] = 1;
+    m_frameRefined[i] = f.poses[0];
   }
 }
 
@@ -376,17 +374,15 @@ core::TTrajectory CKeyframeSmoother::trajectory() const
   std::lock_guard<std::mutex> lk(m_mutex);
   core::TTrajectory out;
   out.reserve(m_framePoses.size());
-  for (std::size_t i = 0; i < m_framePoses.size(); ++i)
-  {
-    const std::size_t k = m_frameKeyframe[i] != kNone ? m_frameKeyframe[i] : 0;
-    if (m_frameRefined[i])
-      out.push_back(m_frameSmoothed[i]);
-    else if (m_keyframes.empty())
-      out.push_back(m_framePoses[i]);
-    else
-      out.push_back(carried(m_keyframes[k].smoothedPose, m_keyframes[k].filterPose, m_framePoses[i]));
-  }
+  for (std::size_t i = 0; i < m_framePoses.size(); ++i) out.push_back(m_frameRefined[i].value_or(composedPose(i)));
   return out;
+}
+
+core::TStampedPose CKeyframeSmoother::composedPose(std::size_t i) const
+{
+  if (m_keyframes.empty()) return m_framePoses[i];
+  const TSmoothedKeyframe& kf = m_keyframes[m_frameKeyframe[i] != kNone ? m_frameKeyframe[i] : 0];
+  return carried(kf.smoothedPose, kf.filterPose, m_framePoses[i]);
 }
 
 TSmootherStats CKeyframeSmoother::stats() const

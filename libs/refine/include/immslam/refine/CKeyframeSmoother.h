@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <deque>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -149,6 +150,10 @@ class CKeyframeSmoother
   /** The bundle problem of the window of n keyframes from `first` with its anchors (returned in
    * `anchors`, keyframe indices, newest first; their poses follow the window's). */
   TBundleProblem windowProblem(std::size_t first, std::size_t n, std::vector<std::size_t>& anchors) const;
+  /** Frame i's pose from its keyframe (the last one at or before it, or the first keyframe): the
+   * keyframe's smoothed pose composed with the filter's motion since; the filter's pose when there
+   * is no keyframe. */
+  core::TStampedPose composedPose(std::size_t i) const;
   /** Bundle-adjusts the window and publishes its poses. */
   void optimiseWindow();
   /** Every frame from `firstFrame` on that is not a keyframe: its pose refined against the
@@ -165,8 +170,9 @@ class CKeyframeSmoother
   bool m_stop = false, m_finished = false;
   std::vector<core::TStampedPose> m_framePoses;  ///< the filter's pose of every ingested frame
   std::vector<std::vector<TSmootherMatch>> m_frameMatches;  ///< the matches of every ingested frame
-  std::vector<core::TStampedPose> m_frameSmoothed;  ///< per frame: refined against a window's points
-  std::vector<char> m_frameRefined;                 ///< m_frameSmoothed[i] holds such a pose
+  /** Per frame: its pose refined against the points of the last window that covered it (none for
+   * keyframes, and for frames no window has covered yet). */
+  std::vector<std::optional<core::TStampedPose>> m_frameRefined;
   std::vector<std::size_t> m_frameKeyframe;      ///< index into m_keyframes (or npos: none yet)
   std::vector<TSmoothedKeyframe> m_keyframes;
   std::vector<char> m_placed;  ///< per keyframe: in an optimised window (optimised, or held as its gauge)
