@@ -41,16 +41,19 @@ void refineTrajectory(const std::vector<eval::TSearchRow>& rows, const core::TTr
     const double before = refine::reprojectionStats(prob).rmsPx;
     const refine::TBundleResult r = refine::bundleAdjust(prob);
     const double after = refine::reprojectionStats(prob).rmsPx;
-    core::writeTumTrajectory(prob.poses, out.path("trajectory_refined.txt"));
+    // Every frame: those the adjustment left out (fewer than 6 of its features measured: the filter
+    // lost its map, a fast turn) interpolated between the refined poses around them.
+    const core::TTrajectory refined = core::completeTrajectory(prob.poses, start);
+    core::writeTumTrajectory(refined, out.path("trajectory_refined.txt"));
     summary.refineSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::ostringstream m;
-    m << std::fixed << std::setprecision(3) << "trajectory_refined.txt: " << prob.poses.size() << " poses, "
+    m << std::fixed << std::setprecision(3) << "trajectory_refined.txt: " << prob.poses.size() << " of " << refined.size() << " poses, "
       << prob.points.size() << " features, " << prob.obs.size() << " matches; reprojection RMS " << before << " -> "
       << after << " px in " << r.iterations << " iterations, " << std::setprecision(2) << summary.refineSeconds
       << " s";
     if (r.components > 1) m << "; " << r.components << " unrelated blocks (the run started new maps), each in its own frame";
     log.logStr(mrpt::system::LVL_INFO, m.str());
-    if (gt && prob.poses.size() >= 3) summary.ateRefined = eval::computeAte(prob.poses, *gt, eval::EAlignment::Sim3, 0.01);
+    if (gt && prob.poses.size() >= 3) summary.ateRefined = eval::computeAte(refined, *gt, eval::EAlignment::Sim3, 0.01);
   }
   catch (const std::exception& e)
   {

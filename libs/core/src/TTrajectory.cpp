@@ -1,6 +1,8 @@
 /* imm-monoslam — TUM trajectory files. */
 #include <immslam/core/TTrajectory.h>
+#include <immslam/math/quaternion.h>
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -115,4 +117,69 @@ std::vector<Vec3> trajectoryPositions(const TTrajectory& traj)
   for (const auto& p : traj) out.push_back(p.p_W_C);
   return out;
 }
+TStampedPose interpolatePose(const TStampedPose& a, const TStampedPose& b, double t)
+{
+  const double span = b.timestamp - a.timestamp;
+  const double u = span > 0 ? std::clamp((t - a.timestamp) / span, 0.0, 1.0) : 0.0;
+  TStampedPose out;
+  out.timestamp = t;
+  out.p_W_C = (1 - u) * a.p_W_C + u * b.p_W_C;
+  out.q_W_C = math::fromEigen(math::toEigen(a.q_W_C).slerp(u, math::toEigen(b.q_W_C)).normalized());
+  return out;
+}
+
+TStampedPose carryPose(const TStampedPose& to, const TStampedPose& from, const TStampedPose& p)
+{
+  // from^-1 p: p in the camera frame of `from`; then to * that.
+  const Vec4 qFromInv = math::quatConjugate(from.q_W_C);
+  const Vec3 pRel = math::quatRotate(qFromInv, p.p_W_C - from.p_W_C);
+  const Vec4 qRel = math::quatNormalized(math::quatMultiply(qFromInv, p.q_W_C));
+  TStampedPose out;
+  out.timestamp = p.timestamp;
+  out.p_W_C = to.p_W_C + math::quatRotate(to.q_W_C, pRel);
+  out.q_W_C = math::quatNormalized(math::quatMultiply(to.q_W_C, qRel));
+  return out;
+}
+
+TTrajectory completeTrajectory(const TTrajectory& placed, const TTrajectory& all)
+{
+  // Each placed pose's index in `all` (both in time order: one merge); a placed pose at no time of
+  // `all` is left out.
+  constexpr double kSameTime = 1e-6;
+  std::vector<std::size_t> at(all.size(), placed.size());  // per frame of `all`: its placed pose, if any
+  std::vector<std::size_t> placedFrames;                    // the frames of `all` that have one
+  for (std::size_t i = 0, k = 0; i < all.size() && k < placed.size();)
+  {
+    const double d = placed[k].timestamp - all[i].timestamp;
+    if (std::abs(d) <= kSameTime)
+    {
+      at[i] = k++;
+      placedFrames.push_back(i++);
+    }
+    else if (d < 0)
+      ++k;
+    else
+      ++i;
+  }
+  if (placedFrames.empty()) return all;
+  TTrajectory out;
+  out.reserve(all.size());
+  std::size_t next = 0;  // placed frames before i (placedFrames[next] is the first one after it)
+  for (std::size_t i = 0; i < all.size(); ++i)
+  {
+    if (at[i] < placed.size())
+    {
+      out.push_back(placed[at[i]]);
+      ++next;
+    }
+    else if (next == 0)
+      out.push_back(carryPose(placed[at[placedFrames[0]]], all[placedFrames[0]], all[i]));
+    else if (next == placedFrames.size())
+      out.push_back(carryPose(placed[at[placedFrames.back()]], all[placedFrames.back()], all[i]));
+    else
+      out.push_back(interpolatePose(placed[at[placedFrames[next - 1]]], placed[at[placedFrames[next]]], all[i].timestamp));
+  }
+  return out;
+}
+
 }  // namespace immslam::core

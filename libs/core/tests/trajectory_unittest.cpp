@@ -1,7 +1,8 @@
 /* Tests: TUM trajectory files (core/TTrajectory.h): exact round trip, field order, comments,
- * normalization, errors naming file and line. */
+ * normalization, errors naming file and line; pose interpolation and the completion of a trajectory. */
 #include <gtest/gtest.h>
 #include <immslam/core/TTrajectory.h>
+#include <immslam/math/quaternion.h>
 #include <immslam/math/random_samples.h>
 
 #include <cmath>
@@ -112,4 +113,71 @@ TEST(TumIO, MalformedLineErrorNamesFileAndLine)
   {
     EXPECT_NE(std::string(e.what()).find("does_not_exist.txt"), std::string::npos);
   }
+}
+
+namespace
+{
+core::TStampedPose pose(double t, const Vec3& p, const Vec3& rotationVector)
+{
+  core::TStampedPose s;
+  s.timestamp = t;
+  s.p_W_C = p;
+  s.q_W_C = math::quatFromRotationVector(rotationVector);
+  return s;
+}
+}  // namespace
+
+TEST(PoseInterpolation, ConstantVelocityInTimeAndClampedOutside)
+{
+  const core::TStampedPose a = pose(1.0, Vec3(0, 0, 0), Vec3(0, 0, 0));
+  const core::TStampedPose b = pose(3.0, Vec3(2, -4, 6), Vec3(0, 0.8, 0));
+  const core::TStampedPose m = core::interpolatePose(a, b, 1.5);  // a quarter of the way
+  EXPECT_EQ(m.timestamp, 1.5);
+  EXPECT_LT((m.p_W_C - Vec3(0.5, -1, 1.5)).norm(), 1e-12);
+  EXPECT_LT((math::quatToRotationVector(m.q_W_C) - Vec3(0, 0.2, 0)).norm(), 1e-12);
+  const core::TStampedPose before = core::interpolatePose(a, b, 0.0), after = core::interpolatePose(a, b, 9.0);
+  EXPECT_EQ(before.timestamp, 0.0);
+  EXPECT_LT((before.p_W_C - a.p_W_C).norm(), 1e-12);
+  EXPECT_LT((after.p_W_C - b.p_W_C).norm(), 1e-12);
+  EXPECT_LT((math::quatToRotationVector(after.q_W_C) - Vec3(0, 0.8, 0)).norm(), 1e-12);
+}
+
+TEST(PoseInterpolation, CarryKeepsThePoseRelativeToItsReference)
+{
+  std::mt19937 rng(3);
+  core::TStampedPose from, to, p;
+  from.p_W_C = randomVec3(rng, 5.0), from.q_W_C = randomQuat(rng);
+  to.p_W_C = randomVec3(rng, 5.0), to.q_W_C = randomQuat(rng);
+  p.p_W_C = randomVec3(rng, 5.0), p.q_W_C = randomQuat(rng), p.timestamp = 7;
+  const core::TStampedPose c = core::carryPose(to, from, p);
+  EXPECT_EQ(c.timestamp, 7.0);
+  // The relative pose from^-1 p equals to^-1 c.
+  const Mat3 Rf = math::quatToRotation(from.q_W_C), Rt = math::quatToRotation(to.q_W_C);
+  EXPECT_LT((Rf.transpose() * (p.p_W_C - from.p_W_C) - Rt.transpose() * (c.p_W_C - to.p_W_C)).norm(), 1e-12);
+  EXPECT_LT((Rf.transpose() * math::quatToRotation(p.q_W_C) - Rt.transpose() * math::quatToRotation(c.q_W_C)).norm(),
+            1e-12);
+  // Carried onto itself: unchanged.
+  EXPECT_LT((core::carryPose(from, from, p).p_W_C - p.p_W_C).norm(), 1e-12);
+}
+
+TEST(PoseInterpolation, CompleteTrajectoryFillsTheFramesLeftOut)
+{
+  // `all`: 8 frames moving along x; placed: frames 2, 3 and 6 only, shifted by +10 in y (another
+  // estimate). Frames 4-5 between placed poses: interpolated; 0-1 before and 7 after: carried by all's motion.
+  core::TTrajectory all, placed;
+  for (int i = 0; i < 8; ++i) all.push_back(pose(0.1 * i, Vec3(i, 0, 0), Vec3(0, 0, 0)));
+  for (int i : {2, 3, 6}) placed.push_back(pose(0.1 * i, Vec3(i, 10, 0), Vec3(0, 0, 0)));
+  placed[2].p_W_C.z() = 3;  // frame 6 off in z: the interpolation shows
+  const core::TTrajectory out = core::completeTrajectory(placed, all);
+  ASSERT_EQ(out.size(), all.size());
+  for (std::size_t i = 0; i < out.size(); ++i) EXPECT_EQ(out[i].timestamp, all[i].timestamp) << i;
+  EXPECT_LT((out[0].p_W_C - Vec3(0, 10, 0)).norm(), 1e-9);
+  EXPECT_LT((out[1].p_W_C - Vec3(1, 10, 0)).norm(), 1e-9);
+  EXPECT_EQ(out[2].p_W_C, placed[0].p_W_C);
+  EXPECT_LT((out[4].p_W_C - Vec3(4, 10, 1)).norm(), 1e-9);
+  EXPECT_LT((out[5].p_W_C - Vec3(5, 10, 2)).norm(), 1e-9);
+  EXPECT_EQ(out[6].p_W_C, placed[2].p_W_C);
+  EXPECT_LT((out[7].p_W_C - Vec3(7, 10, 3)).norm(), 1e-9);
+  // Nothing placed: `all` as it is.
+  EXPECT_EQ(core::completeTrajectory({}, all)[5].p_W_C, all[5].p_W_C);
 }

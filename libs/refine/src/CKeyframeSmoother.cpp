@@ -27,33 +27,6 @@ double threadCpuSeconds()
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
-
-/** a * b of poses T_W_C (b expressed in a's camera frame). */
-core::TStampedPose compose(const core::TStampedPose& a, const core::TStampedPose& b)
-{
-  core::TStampedPose c = b;
-  c.p_W_C = a.p_W_C + math::quatRotate(a.q_W_C, b.p_W_C);
-  c.q_W_C = math::quatNormalized(math::quatMultiply(a.q_W_C, b.q_W_C));
-  return c;
-}
-
-/** a^-1 * b: the pose b in the camera frame of a. */
-core::TStampedPose between(const core::TStampedPose& a, const core::TStampedPose& b)
-{
-  core::TStampedPose c = b;
-  const Vec4 qa_inv = math::quatConjugate(a.q_W_C);
-  c.p_W_C = math::quatRotate(qa_inv, b.p_W_C - a.p_W_C);
-  c.q_W_C = math::quatNormalized(math::quatMultiply(qa_inv, b.q_W_C));
-  return c;
-}
-
-/** `rel` (a pose in the frame of `from`) moved onto `to`, keeping rel's timestamp. */
-core::TStampedPose carried(const core::TStampedPose& to, const core::TStampedPose& from, const core::TStampedPose& p)
-{
-  core::TStampedPose out = compose(to, between(from, p));
-  out.timestamp = p.timestamp;
-  return out;
-}
 }  // namespace
 
 CKeyframeSmoother::CKeyframeSmoother(const TOptions& opts, double fx, double fy) : m_opts(opts), m_fx(fx), m_fy(fy)
@@ -205,7 +178,7 @@ bool CKeyframeSmoother::ingest(TSmootherFrame&& frame)
   // Starts where the last keyframe's smoothed pose and the filter's motion since it put it.
   kf.smoothedPose = m_keyframes.empty()
                         ? frame.pose
-                        : carried(m_keyframes.back().smoothedPose, m_keyframes.back().filterPose, frame.pose);
+                        : core::carryPose(m_keyframes.back().smoothedPose, m_keyframes.back().filterPose, frame.pose);
   m_frameKeyframe.push_back(m_keyframes.size());
   m_keyframes.push_back(kf);
   m_placed.push_back(0);
@@ -375,6 +348,18 @@ core::TTrajectory CKeyframeSmoother::trajectory() const
   core::TTrajectory out;
   out.reserve(m_framePoses.size());
   for (std::size_t i = 0; i < m_framePoses.size(); ++i) out.push_back(m_frameRefined[i].value_or(composedPose(i)));
+  // A frame with fewer than minMatches matches is not placed by the images (the filter lost its
+  // features: a fast turn, blur, an occlusion), and the filter's pose there is a prediction
+  // corrected by a match or two. Between two frames with matches it takes the pose interpolated in
+  // time: a smoother has the frames after it.
+  std::size_t last = kNone;  // the last frame with minMatches matches
+  for (std::size_t i = 0; i < out.size(); ++i)
+  {
+    if (m_frameMatches[i].size() < m_opts.minMatches) continue;
+    if (last != kNone)
+      for (std::size_t j = last + 1; j < i; ++j) out[j] = core::interpolatePose(out[last], out[i], out[j].timestamp);
+    last = i;
+  }
   return out;
 }
 
@@ -382,7 +367,7 @@ core::TStampedPose CKeyframeSmoother::composedPose(std::size_t i) const
 {
   if (m_keyframes.empty()) return m_framePoses[i];
   const TSmoothedKeyframe& kf = m_keyframes[m_frameKeyframe[i] != kNone ? m_frameKeyframe[i] : 0];
-  return carried(kf.smoothedPose, kf.filterPose, m_framePoses[i]);
+  return core::carryPose(kf.smoothedPose, kf.filterPose, m_framePoses[i]);
 }
 
 TSmootherStats CKeyframeSmoother::stats() const

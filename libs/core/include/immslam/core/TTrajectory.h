@@ -37,6 +37,21 @@ void writeTumTrajectory(const TTrajectory& traj, const std::string& path);
  * exact. Locale independent. */
 std::string formatTumLine(const TStampedPose& p);
 
+/** The pose at time t on the constant-velocity path from a to b: the position linear in time, the
+ * orientation on the shorter great circle (slerp); a's pose before a's time, b's after b's (with
+ * timestamp t in every case). */
+TStampedPose interpolatePose(const TStampedPose& a, const TStampedPose& b, double t);
+
+/** p moved rigidly as `from` is moved onto `to` (to from^-1 p): p's pose relative to `from`, kept
+ * relative to `to`; p's timestamp. */
+TStampedPose carryPose(const TStampedPose& to, const TStampedPose& from, const TStampedPose& p);
+
+/** A pose for every timestamp of `all` (time order) from the poses of `placed` (a subset of its
+ * timestamps, to 1 microsecond, in time order): a placed pose as it is; between two placed poses the
+ * pose interpolated in time (interpolatePose); before the first or after the last placed pose, the
+ * nearest one carried by `all`'s motion from it (carryPose). `all` itself when `placed` is empty. */
+TTrajectory completeTrajectory(const TTrajectory& placed, const TTrajectory& all);
+
 /** The positions p_W_C of a trajectory, in order. */
 std::vector<Vec3> trajectoryPositions(const TTrajectory& traj);
 }  // namespace immslam::core

@@ -130,7 +130,10 @@ class CKeyframeSmoother
   /** Every frame given, smoothed: a keyframe's smoothed pose; another frame's pose refined against
    * the points of the last window that covered it, or else its keyframe's (the last one at or
    * before it, or the first keyframe) smoothed pose composed with the filter's motion from that
-   * keyframe. The filter's poses when there is no keyframe. Call after finish(). */
+   * keyframe. The filter's poses when there is no keyframe. A frame with fewer than
+   * TOptions::minMatches matches (the filter lost its features) between two frames with them takes
+   * the pose interpolated in time between theirs (position linear, orientation slerp). Call after
+   * finish(). */
   core::TTrajectory trajectory() const;
 
   /** Lag and CPU time so far. */
