@@ -16,8 +16,6 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <numeric>
 #include <random>
 #include <set>
@@ -49,15 +47,6 @@ core::TTrajectory makeTrajectory(size_t n, double t0 = 100.0, double period = 1.
     tr.push_back(p);
   }
   return tr;
-}
-std::string tempPath(const std::string& name)
-{
-  return (std::filesystem::path(::testing::TempDir()) / ("immslam_eval_" + name)).string();
-}
-void writeText(const std::string& path, const std::string& text)
-{
-  std::ofstream f(path);
-  f << text;
 }
 void expectProperRotation(const Mat3& R, double tol = 1e-12)
 {

@@ -823,7 +823,10 @@ TEST(SimOutput, PointTracksAreTheVisibleProjectionsOfPointsOnTheirSurfaces)
       local = math::quatRotate(math::quatConjugate(it->T_W_O.q), r.p - it->T_W_O.t);
     }
     const auto [pos, fresh] = inObjectFrame.emplace(r.id, local);
-    if (!fresh) EXPECT_NEAR((pos->second - local).norm(), 0.0, 1e-5) << "point " << r.id;
+    if (!fresh)
+    {
+      EXPECT_NEAR((pos->second - local).norm(), 0.0, 1e-5) << "point " << r.id;
+    }
     // The renderer's mask says the same (away from silhouettes: almost everywhere).
     if (!masks.count(k)) masks[k] = sim.renderMask(k);
     const int u = std::clamp(static_cast<int>(std::lround(r.uv.x())), 0, masks[k].cols - 1);
