@@ -8,6 +8,9 @@
 #include <immslam/eval/rpe.h>
 #include <immslam/eval/search_nis.h>
 #include <immslam/eval/statistics.h>
+#include <immslam/viz/scene.h>
+
+#include <mrpt/opengl/CSetOfLines.h>
 
 #include <algorithm>
 #include <fstream>
@@ -308,6 +311,12 @@ TEST(SystemOutputs, SmoothedTrajectoryOnlyWhenAskedAndTheFilterUnchanged)
   EXPECT_LT(s.ateSmoothed->rmseOverPath, 0.5 * s.ate->rmseOverPath);
   EXPECT_EQ(readFile(plain + "/trajectory.txt"), readFile(smoothed + "/trajectory.txt"));
   EXPECT_EQ(readFile(plain + "/model_probabilities.csv"), readFile(smoothed + "/model_probabilities.csv"));
+  // The scene draws the smoothed trajectory beside the filter's (a run without smoothing: none).
+  const auto scene = viz::loadSceneFile(smoothed + "/scene.3Dscene");
+  const auto line = std::dynamic_pointer_cast<mrpt::opengl::CSetOfLines>(viz::findObject(*scene, "smoothed_trajectory"));
+  ASSERT_TRUE(line);
+  EXPECT_EQ(line->getLineCount(), traj.size() - 1);
+  EXPECT_FALSE(viz::findObject(*viz::loadSceneFile(plain + "/scene.3Dscene"), "smoothed_trajectory"));
 }
 
 TEST(SystemOutputs, ContractFilesAndDeterminism)

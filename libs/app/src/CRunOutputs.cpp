@@ -272,8 +272,11 @@ CRunOutputs::CRunOutputs(const TRunContext& ctx, const TRunInputs& in, const sys
   // After the smoothing: it starts from the smoothed trajectory (the sinks end in this order).
   if (in.out.refine_trajectory) m_sinks.push_back(std::make_unique<CRefineSink>(ctx, in, *m_files, smoothing));
   if (in.out.overlays || in.out.overlay_video) m_sinks.push_back(std::make_unique<COverlaySink>(ctx.args.outDir, in.out));
-  if (CLiveView::available(ctx.args.noGui)) m_sinks.push_back(std::make_unique<CLiveViewSink>(in.out, trajectory));
-  if (in.out.scene || in.out.scene_every_n > 0) m_sinks.push_back(std::make_unique<CSceneSink>(ctx, in, trajectory));
+  if (CLiveView::available(ctx.args.noGui))
+    m_sinks.push_back(std::make_unique<CLiveViewSink>(in.out, trajectory, smoothing));
+  // After the smoothing: the final scene draws the whole smoothed trajectory.
+  if (in.out.scene || in.out.scene_every_n > 0)
+    m_sinks.push_back(std::make_unique<CSceneSink>(ctx, in, trajectory, smoothing));
 }
 
 CRunOutputs::~CRunOutputs() = default;

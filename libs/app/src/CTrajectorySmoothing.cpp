@@ -75,4 +75,12 @@ void CTrajectorySmoothing::finish(const std::string& path, const std::optional<c
     }
   }
 }
+core::TTrajectory CTrajectorySmoothing::published() const
+{
+  if (!m_result.empty()) return m_result;
+  core::TTrajectory out;
+  for (const auto& kf : m_smoother.keyframes())
+    if (kf.optimised) out.push_back(kf.smoothedPose);
+  return out;
+}
 }  // namespace immslam::app::detail

@@ -35,6 +35,10 @@ class CTrajectorySmoothing
   /** The smoothed trajectory written by finish() (empty before). */
   const core::TTrajectory& trajectory() const { return m_result; }
 
+  /** What the scenes draw: before finish(), the keyframes optimised so far at their smoothed poses
+   * (the smoother's lag behind the filter); after it, trajectory(). */
+  core::TTrajectory published() const;
+
  private:
   const camera::CCameraModel& m_cam;
   refine::CKeyframeSmoother m_smoother;

@@ -68,6 +68,8 @@ class CSmoothingSink : public IFrameSink
   void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
   /** The smoothed trajectory once onEnd() has run (empty before). */
   const core::TTrajectory& trajectory() const { return m_smoothing.trajectory(); }
+  /** What the scenes draw: the keyframes smoothed so far, then the whole smoothed trajectory. */
+  core::TTrajectory published() const { return m_smoothing.published(); }
 
  private:
   const TRunInputs& m_in;
@@ -120,9 +122,10 @@ struct TTrackHistory
 };
 
 /** The scene of the current state: trajectory, camera, map with uncertainties, the dynamic tracks
- * near the map. */
+ * near the map, and the smoother's trajectory so far when the run smooths (`smoothing` not null). */
 viz::TSceneContent sceneContent(const slam::CMonoSlamIMM& slam, const core::TTrajectory& trajectory,
-                                const TTrackHistory& tracks, const std::string& title);
+                                const TTrackHistory& tracks, const std::string& title,
+                                const CSmoothingSink* smoothing);
 
 /** [output] overlays, overlay_video: overlays/ and overlays.avi every overlay_every_n frames. */
 class COverlaySink : public IFrameSink
@@ -141,7 +144,7 @@ class COverlaySink : public IFrameSink
 class CLiveViewSink : public IFrameSink
 {
  public:
-  CLiveViewSink(const TOutputOptions& opts, const core::TTrajectory& trajectory);
+  CLiveViewSink(const TOutputOptions& opts, const core::TTrajectory& trajectory, const CSmoothingSink* smoothing);
   void onFrame(const TFrameResult& r) override;
   void onEnd(const slam::CMonoSlamIMM&, TRunSummary&) override {}
 
@@ -149,6 +152,7 @@ class CLiveViewSink : public IFrameSink
   CLiveView m_view;
   std::size_t m_sceneEveryN;
   const core::TTrajectory& m_trajectory;
+  const CSmoothingSink* m_smoothing;  ///< null: the run does not smooth
   TTrackHistory m_tracks;
 };
 
@@ -157,7 +161,8 @@ class CLiveViewSink : public IFrameSink
 class CSceneSink : public IFrameSink
 {
  public:
-  CSceneSink(const TRunContext& ctx, const TRunInputs& in, const core::TTrajectory& trajectory);
+  CSceneSink(const TRunContext& ctx, const TRunInputs& in, const core::TTrajectory& trajectory,
+             const CSmoothingSink* smoothing);
   void onFrame(const TFrameResult& r) override;
   void onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary) override;
 
@@ -165,6 +170,7 @@ class CSceneSink : public IFrameSink
   const TRunContext& m_ctx;
   const TRunInputs& m_in;
   const core::TTrajectory& m_trajectory;
+  const CSmoothingSink* m_smoothing;  ///< null: the run does not smooth (ends before this sink)
   TTrackHistory m_tracks;
 };
 

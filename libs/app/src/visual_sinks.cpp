@@ -82,10 +82,12 @@ void TTrackHistory::add(const system::TSystemFrame& fr)
 }
 
 viz::TSceneContent sceneContent(const slam::CMonoSlamIMM& slam, const core::TTrajectory& trajectory,
-                                const TTrackHistory& tracks, const std::string& title)
+                                const TTrackHistory& tracks, const std::string& title,
+                                const CSmoothingSink* smoothing)
 {
   viz::TSceneContent c;
   c.trajectory = trajectory;
+  if (smoothing) c.smoothed = smoothing->published();
   c.camera = std::shared_ptr<const camera::CCameraModel>(&slam.camera(), [](const camera::CCameraModel*) {});
   c.currentCamera = core::TStampedPose{0, slam.cameraPosition(), slam.cameraOrientation()};
   c.title = title;
@@ -129,8 +131,11 @@ void COverlaySink::onFrame(const TFrameResult& r)
 
 void COverlaySink::onEnd(const slam::CMonoSlamIMM&, TRunSummary&) { m_writer.close(); }
 
-CLiveViewSink::CLiveViewSink(const TOutputOptions& opts, const core::TTrajectory& trajectory)
-    : m_sceneEveryN(static_cast<std::size_t>(std::max(1, opts.gui_scene_every_n))), m_trajectory(trajectory)
+CLiveViewSink::CLiveViewSink(const TOutputOptions& opts, const core::TTrajectory& trajectory,
+                             const CSmoothingSink* smoothing)
+    : m_sceneEveryN(static_cast<std::size_t>(std::max(1, opts.gui_scene_every_n))),
+      m_trajectory(trajectory),
+      m_smoothing(smoothing)
 {
 }
 
@@ -140,11 +145,12 @@ void CLiveViewSink::onFrame(const TFrameResult& r)
   if (!m_view.isOpen()) return;
   m_view.showImage(drawFrameOverlay(r));
   if (r.processed % m_sceneEveryN == 0)
-    m_view.showScene(sceneContent(r.slam, m_trajectory, m_tracks, "imm-monoslam (live)"));
+    m_view.showScene(sceneContent(r.slam, m_trajectory, m_tracks, "imm-monoslam (live)", m_smoothing));
 }
 
-CSceneSink::CSceneSink(const TRunContext& ctx, const TRunInputs& in, const core::TTrajectory& trajectory)
-    : m_ctx(ctx), m_in(in), m_trajectory(trajectory)
+CSceneSink::CSceneSink(const TRunContext& ctx, const TRunInputs& in, const core::TTrajectory& trajectory,
+                       const CSmoothingSink* smoothing)
+    : m_ctx(ctx), m_in(in), m_trajectory(trajectory), m_smoothing(smoothing)
 {
 }
 
@@ -155,7 +161,7 @@ void CSceneSink::onFrame(const TFrameResult& r)
   if (n <= 0 || r.processed % static_cast<std::size_t>(n) != 0) return;
   char name[64];
   std::snprintf(name, sizeof name, "scene_%06zu", r.processed);
-  const auto content = sceneContent(r.slam, m_trajectory, m_tracks, name);
+  const auto content = sceneContent(r.slam, m_trajectory, m_tracks, name, m_smoothing);
   const auto scene = viz::buildScene(content, viz::sceneOptionsFitting(content));
   const fs::path dir(m_ctx.args.outDir);
   viz::saveSceneFile(*scene, (dir / (std::string(name) + ".3Dscene")).string());
@@ -165,7 +171,7 @@ void CSceneSink::onFrame(const TFrameResult& r)
 void CSceneSink::onEnd(const slam::CMonoSlamIMM& slam, TRunSummary& summary)
 {
   if (!m_in.out.scene) return;
-  auto content = sceneContent(slam, m_trajectory, m_tracks, "imm-monoslam");
+  auto content = sceneContent(slam, m_trajectory, m_tracks, "imm-monoslam", m_smoothing);
   const auto groundTruth = m_in.source->groundTruth();
   // Ground truth shown in the estimate's frame: the inverse of the Sim(3) that aligned est -> gt.
   if (groundTruth && summary.ate) content.groundTruth = eval::applySim3(summary.ate->sim3().inverse(), *groundTruth);

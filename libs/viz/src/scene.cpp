@@ -40,6 +40,7 @@ TBox3 contentBox(const TSceneContent& c)
   for (const auto& p : c.trajectory) box.add(p.p_W_C);
   if (c.groundTruth)
     for (const auto& p : *c.groundTruth) box.add(p.p_W_C);
+  for (const auto& p : c.smoothed) box.add(p.p_W_C);
   if (c.currentCamera) box.add(c.currentCamera->p_W_C);
   for (const auto& f : c.points)
   {
@@ -357,6 +358,12 @@ mo::COpenGLScene::Ptr buildScene(const TSceneContent& c, const TSceneOptions& o)
     auto gt = polyline(positions(*c.groundTruth), o.groundTruthColour, o.lineWidth);
     gt->setName("gt_trajectory");
     world->insert(gt);
+  }
+  if (c.smoothed.size() >= 2)
+  {
+    auto sm = polyline(positions(c.smoothed), o.smoothedColour, o.lineWidth);
+    sm->setName("smoothed_trajectory");
+    world->insert(sm);
   }
 
   std::optional<core::TStampedPose> cur = c.currentCamera;

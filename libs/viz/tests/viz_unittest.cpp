@@ -128,6 +128,8 @@ TSceneContent fullContent()
   std::vector<core::TStampedPose> gt = c.trajectory;
   for (auto& p : gt) p.p_W_C += Vec3(0.02, 0.0, -0.01);
   c.groundTruth = gt;
+  c.smoothed.assign(c.trajectory.begin(), c.trajectory.begin() + 12);  // published up to frame 11
+  for (auto& p : c.smoothed) p.p_W_C += Vec3(0.0, 0.01, 0.0);
   c.camera = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 159.5, 119.5});
   std::mt19937 rng(3);
   for (int i = 0; i < 3; ++i)  // XYZ features
@@ -213,12 +215,13 @@ TEST(VizScene, SaveLoadKeepsNamedObjectsAndCounts)
   ASSERT_TRUE(std::filesystem::file_size(path) > 1000);
   const auto s = loadSceneFile(path);
 
-  for (const char* n : {"world", "grid", "origin", "trajectory", "gt_trajectory", "camera",
+  for (const char* n : {"world", "grid", "origin", "trajectory", "gt_trajectory", "smoothed_trajectory", "camera",
            "camera_frustum", "camera_axes", "map", "map_xyz", "map_id_points", "map_rays", "tracks",
            "title"})
     EXPECT_TRUE(findObject(*s, n)) << n;
   EXPECT_EQ(get<mo::CSetOfLines>(*s, "trajectory")->getLineCount(), 19u);
   EXPECT_EQ(get<mo::CSetOfLines>(*s, "gt_trajectory")->getLineCount(), 19u);
+  EXPECT_EQ(get<mo::CSetOfLines>(*s, "smoothed_trajectory")->getLineCount(), 11u);
   EXPECT_EQ(get<mo::CPointCloudColoured>(*s, "map_xyz")->size(), 3u);
   EXPECT_EQ(get<mo::CPointCloudColoured>(*s, "map_id_points")->size(), 2u);
   EXPECT_EQ(get<mo::CSetOfLines>(*s, "map_rays")->getLineCount(), 2u);
@@ -260,6 +263,7 @@ TEST(VizScene, OptionalPartsAreLeftOut)
   EXPECT_FALSE(findObject(*s, "grid"));
   EXPECT_FALSE(findObject(*s, "origin"));
   EXPECT_FALSE(findObject(*s, "gt_trajectory"));
+  EXPECT_FALSE(findObject(*s, "smoothed_trajectory"));
   EXPECT_FALSE(findObject(*s, "title"));
   EXPECT_TRUE(findObject(*s, "camera"));  // defaults to the last trajectory pose
   EXPECT_EQ(get<mo::CSetOfLines>(*s, "trajectory")->getLineCount(), 0u);

@@ -35,6 +35,7 @@ constexpr TColour kRejected{255, 0, 255};      ///< match rejected as an outlier
 constexpr TColour kNotFound{175, 175, 175};    ///< predicted but not found (grey)
 constexpr TColour kTrajectory{20, 60, 200};    ///< estimated camera trajectory (dark blue)
 constexpr TColour kGroundTruth{0, 160, 60};    ///< ground-truth trajectory (green)
+constexpr TColour kSmoothed{0, 180, 220};      ///< the keyframe smoother's trajectory (light blue)
 constexpr TColour kCamera{20, 20, 20};         ///< current camera frustum (near black)
 constexpr TColour kMapXyz{220, 30, 30};        ///< XYZ map feature (red)
 constexpr TColour kMapIdKnown{240, 130, 0};    ///< inverse-depth feature with a depth (orange)

@@ -8,6 +8,7 @@
  *     "origin"         CSetOfObjects, axes of W (x red, y green, z blue)
  *     "trajectory"     CSetOfLines, estimated camera centres
  *     "gt_trajectory"  CSetOfLines, ground truth (when given)
+ *     "smoothed_trajectory"  CSetOfLines, the keyframe smoother's trajectory (when given)
  *     "camera"         CSetOfObjects at the current pose: "camera_frustum" (CFrustum from the
  *                      camera's field of view) and "camera_axes" (optical frame axes)
  *     "map"            CSetOfObjects:
@@ -83,6 +84,9 @@ struct TSceneContent
 {
   std::vector<core::TStampedPose> trajectory;                 ///< estimated T_W_C over time
   std::optional<std::vector<core::TStampedPose>> groundTruth; ///< drawn when present (aligned to W)
+  /** The online smoother's poses published so far (refine::CKeyframeSmoother), drawn beside the
+   * filter's when it has two or more. */
+  std::vector<core::TStampedPose> smoothed;
   /** The camera drawn as a frustum; defaults to trajectory.back() (none if both are empty). */
   std::optional<core::TStampedPose> currentCamera;
   camera::CCameraModel::Ptr camera;  ///< for the frustum's field of view (null: 60 x 45 deg)
@@ -121,6 +125,7 @@ struct TSceneOptions
   TColour background = palette::kWhite;  ///< viewport background
   TColour trajectoryColour = palette::kTrajectory;  ///< estimated trajectory
   TColour groundTruthColour = palette::kGroundTruth; ///< ground truth
+  TColour smoothedColour = palette::kSmoothed;       ///< the smoother's trajectory
   TColour cameraColour = palette::kCamera;          ///< current camera frustum
   TColour xyzColour = palette::kMapXyz;             ///< XYZ features and their ellipsoids
   TColour idKnownColour = palette::kMapIdKnown;     ///< inverse-depth features with a depth
