@@ -45,6 +45,11 @@ EOF
 # OpenCV's VideoCapture(index) probes libgphoto2 cameras, whose USB plugin leaks and is unloaded
 # (its frames cannot be named in a suppression): that backend is not needed here.
 export OPENCV_VIDEOIO_PRIORITY_GPHOTO2=0
+# Mesa's llvmpipe (the offscreen scene snapshots) keeps its rendering threads alive until the process
+# exits; LeakSanitizer's stop-the-world tracer then has to suspend them and can crash doing so
+# ("Tracer caught signal 11 ... LeakSanitizer has encountered a fatal error", google/sanitizers#1353).
+# LP_NUM_THREADS=0 makes llvmpipe draw in the calling thread: a run ends with its main thread alone.
+export LP_NUM_THREADS=0
 export ASAN_OPTIONS="detect_leaks=1:halt_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1:print_summary=1"
 export LSAN_OPTIONS="suppressions=$SUPP.lsan:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:print_summary=1"
@@ -76,8 +81,18 @@ ctest "${CTEST_ARGS[@]}"
 echo "== sanitize: end-to-end runs ($FRAMES frames of the built-in scene)"
 for cfg in ini/single.ini ini/imm7.ini; do
   out="$BUILD/e2e-$(basename "$cfg" .ini)"
-  "$BUILD/bin/imm-monoslam" "$cfg" --frames "$FRAMES" --out "$out" --no-gui --quiet > "$out.log" 2>&1 || {
-    echo "sanitize: end-to-end run with $cfg failed:"; cat "$out.log"; exit 1; }
+  run_e2e() { "$BUILD/bin/imm-monoslam" "$cfg" --frames "$FRAMES" --out "$out" --no-gui --quiet > "$out.log" 2>&1; }
+  if ! run_e2e; then
+    # LeakSanitizer's own tracer crash (no leak report) is a known intermittent fault of the tool at
+    # exit: the run is made once more, and must then pass with its leak check.
+    if grep -q "LeakSanitizer has encountered a fatal error" "$out.log" &&
+       ! grep -q -E "ERROR: (Address|Leak)Sanitizer|runtime error:" "$out.log"; then
+      echo "   $cfg: LeakSanitizer's tracer crashed at exit (no report); running it again"
+      run_e2e || { echo "sanitize: end-to-end run with $cfg failed:"; cat "$out.log"; exit 1; }
+    else
+      echo "sanitize: end-to-end run with $cfg failed:"; cat "$out.log"; exit 1
+    fi
+  fi
   if grep -q -E "ERROR: (Address|Leak)Sanitizer|runtime error:" "$out.log"; then
     echo "sanitize: sanitizer report in the end-to-end run with $cfg:"; cat "$out.log"; exit 1
   fi
