@@ -219,7 +219,7 @@ CSmoothingSink::CSmoothingSink(const TRunInputs& in, const COutputFiles& files, 
 {
 }
 
-void CSmoothingSink::onFrame(const TFrameResult& r) { m_smoothing.addFrame(r.report, m_files.trajectory().back()); }
+void CSmoothingSink::onFrame(const TFrameResult& r) { m_smoothing.addFrame(r.report, r.slam, m_files.trajectory().back()); }
 
 void CSmoothingSink::onEnd(const slam::CMonoSlamIMM&, TRunSummary& summary)
 {

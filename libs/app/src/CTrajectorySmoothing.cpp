@@ -2,6 +2,10 @@
 #include "CTrajectorySmoothing.h"
 
 #include <immslam/eval/statistics.h>
+#include <immslam/math/quaternion.h>
+
+#include <cmath>
+#include <unordered_map>
 
 #include <chrono>
 #include <iomanip>
@@ -24,10 +28,12 @@ CTrajectorySmoothing::CTrajectorySmoothing(const camera::CCameraModel& cam, bool
 {
 }
 
-void CTrajectorySmoothing::addFrame(const system::TSystemFrame& fr, const core::TStampedPose& pose)
+void CTrajectorySmoothing::addFrame(const system::TSystemFrame& fr, const slam::CMonoSlamIMM& slam,
+                                    const core::TStampedPose& pose)
 {
   refine::TSmootherFrame f;
   f.pose = pose;
+  std::unordered_map<std::int64_t, std::size_t> matchOf;
   for (const auto& sr : fr.slam->searches)
   {
     if (sr.status != slam::TSearchRecord::EStatus::LowInnovationInlier &&
@@ -35,7 +41,25 @@ void CTrajectorySmoothing::addFrame(const system::TSystemFrame& fr, const core::
       continue;
     const math::Bearing b = m_cam.unproject(sr.z);
     const Vec3& d = b.unitVector();
-    if (d.z() > 0) f.matches.push_back({sr.id, Vec2(d.x() / d.z(), d.y() / d.z())});
+    if (!(d.z() > 0)) continue;
+    matchOf.emplace(sr.id, f.matches.size());
+    f.matches.push_back({sr.id, Vec2(d.x() / d.z(), d.y() / d.z())});
+  }
+  // The relative sigma of the filter's depth of each matched feature (relative to the camera):
+  // sigma_rho / rho for a feature still in inverse depth (the depth's to first order), the
+  // position's sigma along the optical axis over the depth for a Euclidean one.
+  const Vec3 axis = math::quatToRotation(pose.q_W_C).col(2);
+  for (const auto& feat : slam.features())
+  {
+    const auto it = matchOf.find(feat.id);
+    if (it == matchOf.end()) continue;
+    const slam::TFeatureWorldEstimate e = slam.featureWorldEstimate(feat);
+    const double z = axis.dot(e.p_W - pose.p_W_C);
+    if (!(z > 0)) continue;
+    const double rel = e.inverseDepth ? (e.rho > 0 ? std::sqrt(e.cov_tpr(2, 2)) / e.rho : 0.0)
+                                      : std::sqrt(axis.dot(e.cov_W * axis)) / z;
+    if (!(rel > 0) || !std::isfinite(rel)) continue;
+    f.matches[it->second].depthRelSigma = rel;
   }
   m_smoother.addFrame(std::move(f));
 }

@@ -24,8 +24,9 @@ class CTrajectorySmoothing
   CTrajectorySmoothing(const camera::CCameraModel& cam, bool live);
 
   /** One processed frame: the filter's pose and the low-innovation and rescued inliers of its
-   * update, as undistorted normalised points. */
-  void addFrame(const system::TSystemFrame& fr, const core::TStampedPose& pose);
+   * update, as undistorted normalised points, with how well the filter knows the depth of each
+   * (`slam`: the filter after the frame). */
+  void addFrame(const system::TSystemFrame& fr, const slam::CMonoSlamIMM& slam, const core::TStampedPose& pose);
 
   /** Stops the smoother, writes `path` (TUM, every frame), fills the summary's smoothed ATE (when
    * `gt` is given), lag and CPU share, and logs one line. */

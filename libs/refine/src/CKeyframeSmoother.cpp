@@ -199,6 +199,15 @@ std::size_t CKeyframeSmoother::gaugeKeyframe(std::size_t first, std::size_t n) c
   return kNone;
 }
 
+std::size_t CKeyframeSmoother::knownDepths(std::size_t first, std::size_t n) const
+{
+  std::size_t count = 0;
+  for (std::size_t k = 0; k < n; ++k)
+    for (const auto& m : m_frameMatches[m_keyframes[first + k].frame])
+      count += m.depthRelSigma <= m_opts.startDepthRelSigma ? 1 : 0;
+  return count;
+}
+
 TBundleProblem CKeyframeSmoother::windowProblem(std::size_t first, std::size_t n, std::vector<std::size_t>& anchors) const
 {
   // The window's features, and the keyframes before the window that measured them (the anchors,
@@ -270,11 +279,17 @@ void CKeyframeSmoother::optimiseWindow()
   {
     held = gaugeKeyframe(first, n);
     if (held == kNone) return;  // no baseline yet: the images cannot fix the window's scale
+    // The run's first window waits (up to twice its size) for the filter's converged depths: until
+    // the filter has seen the camera move, its motion gives the gauge pair no distance.
+    if (m_opts.startDepthRelSigma > 0 && m_stats.optimisations == 0 && n < 2 * m_opts.windowKeyframes &&
+        knownDepths(first, n) < m_opts.minMatches)
+      return;
   }
 
   TBundleOptions bo;
   bo.huberPx = m_opts.huberPx;
   bo.maxIterations = m_opts.maxIterations;
+  if (anchors.size() < 2) bo.maxIterations = m_opts.gaugeMaxIterations;
   for (std::size_t a = 0; a < anchors.size(); ++a) bo.heldPoses.push_back(n + a);
   if (held != kNone)
   {

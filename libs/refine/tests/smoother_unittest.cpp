@@ -18,8 +18,9 @@ namespace
 constexpr double kF = 500;  // focal length (pixels)
 
 /** The scene's frames as the filter would hand them over: the pose drifting away from the truth
- * (test::bend) with a little jitter, and every visible point measured with 0.5 px noise. */
-std::vector<TSmootherFrame> filterFrames(const test::TScene& s)
+ * (test::bend) with a little jitter, every visible point measured with 0.5 px noise, and its depth
+ * known to the filter to 5 % from frame `depthsFrom` on. */
+std::vector<TSmootherFrame> filterFrames(const test::TScene& s, std::size_t depthsFrom = 0)
 {
   std::mt19937 rng(5);
   std::normal_distribution<double> px(0, 0.5), jitter(0, 0.003);
@@ -37,7 +38,9 @@ std::vector<TSmootherFrame> filterFrames(const test::TScene& s)
       if (q.z() <= 0.1) continue;
       const Vec2 xn(q.x() / q.z() + px(rng) / kF, q.y() / q.z() + px(rng) / kF);
       if (std::abs(xn.x()) > 0.64 || std::abs(xn.y()) > 0.48) continue;  // a 640 x 480 image
-      f.matches.push_back({static_cast<std::int64_t>(j), xn});
+      TSmootherMatch m{static_cast<std::int64_t>(j), xn};
+      if (i >= depthsFrom) m.depthRelSigma = 0.05;
+      f.matches.push_back(m);
     }
     frames.push_back(f);
   }
@@ -239,4 +242,36 @@ TEST(KeyframeSmoother, FramesTheImagesDoNotPlaceTakeThePoseBetweenTheirNeighbour
     const double u = static_cast<double>(i - 59) / 5.0;
     EXPECT_LT((lost[i].p_W_C - ((1 - u) * lost[59].p_W_C + u * lost[64].p_W_C)).norm(), 1e-9) << i;
   }
+}
+
+TEST(KeyframeSmoother, TheStartWaitsUntilTheFilterHasSeenTheCameraMove)
+{
+  // A slow start as an IMM in its stationary mode sees it: the filter's first 15 positions stay at
+  // the first one while the camera moves, and its map's depths become known (5 %) from frame 25 on.
+  // A first window optimised as soon as a gauge pair has 5 px of parallax takes the pair's distance
+  // from a filter that has not moved (about zero) and collapses the start; one that waits for the
+  // filter's depths takes it from a filter that has moved.
+  const test::TScene s = test::makeScene(120, 60);
+  std::vector<TSmootherFrame> frames = filterFrames(s, 25);
+  for (std::size_t i = 0; i < 15; ++i) frames[i].pose.p_W_C = frames[0].pose.p_W_C;
+  const auto firstFrames = [](const core::TTrajectory& t, std::size_t n) {
+    return core::TTrajectory(t.begin(), t.begin() + static_cast<std::ptrdiff_t>(n));
+  };
+  const auto run = [&](double relSigma) {
+    CKeyframeSmoother::TOptions o = testOptions(true);
+    o.startDepthRelSigma = relSigma;
+    CKeyframeSmoother sm(o, kF, kF);
+    for (const auto& f : frames) sm.addFrame(f);
+    sm.finish();
+    return sm.trajectory();
+  };
+  const core::TTrajectory waits = run(0.1), atOnce = run(0.0);
+  const double startWaits = test::rmsAfterSim3(firstFrames(waits, 30), firstFrames(s.poses, 30));
+  const double startAtOnce = test::rmsAfterSim3(firstFrames(atOnce, 30), firstFrames(s.poses, 30));
+  const double allWaits = test::rmsAfterSim3(waits, s.poses), allAtOnce = test::rmsAfterSim3(atOnce, s.poses);
+  std::printf("ATE after Sim(3), frames 0-29 / all: first window waiting for the filter's depths %.4f / %.4f, "
+              "not waiting %.4f / %.4f\n", startWaits, allWaits, startAtOnce, allAtOnce);
+  EXPECT_LT(startWaits, 0.5 * startAtOnce);
+  EXPECT_LT(startWaits, 0.012);
+  EXPECT_LT(allWaits, allAtOnce);
 }

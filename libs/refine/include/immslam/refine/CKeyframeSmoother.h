@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <deque>
 #include <mutex>
 #include <optional>
@@ -25,6 +26,9 @@ struct TSmootherMatch
 {
   std::int64_t featureId = 0;
   Vec2 xn = Vec2::Zero();
+  /** The standard deviation of the filter's depth of the feature relative to the depth (and to the
+   * camera); infinity: not known (TOptions::startDepthRelSigma). */
+  double depthRelSigma = std::numeric_limits<double>::infinity();
 };
 
 /** What the smoother receives per frame: the filter's pose T_W_C and the matches of its update. */
@@ -70,6 +74,9 @@ struct TSmootherStats
  * Huber cost). A window with fewer than two anchors (the run's start, a new map) holds its own gauge:
  * its earliest keyframe that sees the newest with TOptions::gaugeBaselinePx of parallax is held and
  * the distance between the two kept (TBundleOptions::scalePoses); without such a pair it waits.
+ * The run's first window also waits for the filter's map to converge (TOptions::startDepthRelSigma):
+ * before, the filter may not have seen the camera move, and its motion gives the gauge pair no
+ * distance.
  * A keyframe leaving the window keeps its last smoothed pose. Then every frame of the window that is
  * not a keyframe is refined alone against the window's points, held (a motion-only adjustment).
  *
@@ -94,10 +101,20 @@ class CKeyframeSmoother
     /** The gauge of a window without anchors: a pair of its keyframes with this median parallax
      * (pixels) between them, the older held and the distance kept. */
     double gaugeBaselinePx = 5;
+    /** The run's first window waits (up to twice windowKeyframes keyframes) until the filter
+     * knows the depths of minMatches of its measurements to this relative standard deviation: the
+     * filter has then seen the camera move, and its motion between the gauge pair is a scale (an
+     * IMM still in its stationary mode while the camera starts slowly has not moved). 0: no wait. */
+    double startDepthRelSigma = 0.1;
     std::size_t minMatches = 8;        ///< a frame with fewer matches is never a keyframe
     int minViews = 3;                  ///< keyframes that must measure a feature for it to enter the window
     double huberPx = 2;                ///< Huber threshold of the cost (pixels)
     int maxIterations = 15;            ///< Levenberg-Marquardt iterations per window optimisation
+    /** Iterations of a window with fewer than two anchors (the run's first windows, a new map): its
+     * keyframes start from the filter's poses, which at a slow start stay where the filter's
+     * stationary mode held them, and the images move them along weakly observed directions (a
+     * small sideways translation looks much like a rotation) that take many iterations to follow. */
+    int gaugeMaxIterations = 100;
     /** The worker skips the optimisation of a keyframe while more frames than this wait in its
      * queue (a later keyframe's optimisation covers it): the lag stays bounded on a slow machine.
      * While it keeps up, the result is that of a synchronous run. */
@@ -150,6 +167,8 @@ class CKeyframeSmoother
   /** The window's keyframe (index from `first`) held as its gauge: the earliest that sees the
    * newest one with gaugeBaselinePx of parallax; npos if none. */
   std::size_t gaugeKeyframe(std::size_t first, std::size_t n) const;
+  /** Measurements of the n keyframes from `first` whose filter depth is known to startDepthRelSigma. */
+  std::size_t knownDepths(std::size_t first, std::size_t n) const;
   /** The bundle problem of the window of n keyframes from `first` with its anchors (returned in
    * `anchors`, keyframe indices, newest first; their poses follow the window's). */
   TBundleProblem windowProblem(std::size_t first, std::size_t n, std::vector<std::size_t>& anchors) const;
