@@ -11,8 +11,8 @@
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
-#include <limits>
 #include <deque>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <thread>
