@@ -47,19 +47,23 @@ void CTrajectorySmoothing::addFrame(const system::TSystemFrame& fr, const slam::
   }
   // The relative sigma of the filter's depth of each matched feature (relative to the camera):
   // sigma_rho / rho for a feature still in inverse depth (the depth's to first order), the
-  // position's sigma along the optical axis over the depth for a Euclidean one.
-  const Vec3 axis = math::quatToRotation(pose.q_W_C).col(2);
-  for (const auto& feat : slam.features())
+  // position's sigma along the optical axis over the depth for a Euclidean one. Only while the
+  // smoother reads them (its start).
+  if (m_smoother.wantsDepths())
   {
-    const auto it = matchOf.find(feat.id);
-    if (it == matchOf.end()) continue;
-    const slam::TFeatureWorldEstimate e = slam.featureWorldEstimate(feat);
-    const double z = axis.dot(e.p_W - pose.p_W_C);
-    if (!(z > 0)) continue;
-    const double rel = e.inverseDepth ? (e.rho > 0 ? std::sqrt(e.cov_tpr(2, 2)) / e.rho : 0.0)
-                                      : std::sqrt(axis.dot(e.cov_W * axis)) / z;
-    if (!(rel > 0) || !std::isfinite(rel)) continue;
-    f.matches[it->second].depthRelSigma = rel;
+    const Vec3 axis = math::quatToRotation(pose.q_W_C).col(2);
+    for (const auto& feat : slam.features())
+    {
+      const auto it = matchOf.find(feat.id);
+      if (it == matchOf.end()) continue;
+      const slam::TFeatureWorldEstimate e = slam.featureWorldEstimate(feat);
+      const double z = axis.dot(e.p_W - pose.p_W_C);
+      if (!(z > 0)) continue;
+      const double rel = e.inverseDepth ? (e.rho > 0 ? std::sqrt(e.cov_tpr(2, 2)) / e.rho : 0.0)
+                                        : std::sqrt(axis.dot(e.cov_W * axis)) / z;
+      if (!(rel > 0) || !std::isfinite(rel)) continue;
+      f.matches[it->second].depthRelSigma = rel;
+    }
   }
   m_smoother.addFrame(std::move(f));
 }

@@ -19,6 +19,8 @@ namespace immslam::refine
 namespace
 {
 constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+// m_placed: no window has placed the keyframe yet / one has / the worker skipped it while behind.
+constexpr char kUnplaced = 0, kPlaced = 1, kSkipped = 2;
 
 /** CPU time of the calling thread (seconds). */
 double threadCpuSeconds()
@@ -96,11 +98,17 @@ void CKeyframeSmoother::run()
     // Frames are taken one by one and the window optimised at every keyframe, as in a synchronous
     // run (same result), unless the worker is behind by more than maxBacklogFrames: then the
     // optimisation is left to a later keyframe (the lag stays bounded, the filter never waits).
-    pending = ingest(std::move(frame)) || pending;
+    const bool newKeyframe = ingest(std::move(frame));
+    pending = newKeyframe || pending;
     if (pending && backlog <= m_opts.maxBacklogFrames)
     {
       optimiseWindow();
       pending = false;
+    }
+    else if (newKeyframe)
+    {
+      std::lock_guard<std::mutex> lk(m_mutex);
+      m_placed.back() = kSkipped;
     }
     std::lock_guard<std::mutex> lk(m_mutex);
     m_stats.cpuSeconds = threadCpuSeconds() - c0;
@@ -181,7 +189,7 @@ bool CKeyframeSmoother::ingest(TSmootherFrame&& frame)
                         : core::carryPose(m_keyframes.back().smoothedPose, m_keyframes.back().filterPose, frame.pose);
   m_frameKeyframe.push_back(m_keyframes.size());
   m_keyframes.push_back(kf);
-  m_placed.push_back(0);
+  m_placed.push_back(kUnplaced);
   ++m_stats.keyframes;
   return true;
 }
@@ -220,7 +228,11 @@ TBundleProblem CKeyframeSmoother::windowProblem(std::size_t first, std::size_t n
   anchors.clear();
   for (std::size_t j = first; j-- > 0 && anchors.size() < m_opts.anchorKeyframes;)
   {
-    if (!m_placed[j]) continue;  // skipped by a worker behind: its pose is the filter's, carried
+    // A keyframe the worker skipped while behind and no window has placed since: the window is
+    // tied to the map before it only through poses the filter's motion carried, so it holds its own
+    // gauge (continuing them) rather than anchors across the gap.
+    if (m_placed[j] == kSkipped) break;
+    if (m_placed[j] != kPlaced) continue;  // no window yet (it waited for a gauge): the filter's pose, carried
     const auto& matches = m_frameMatches[m_keyframes[j].frame];
     if (std::any_of(matches.begin(), matches.end(), [&](const TSmootherMatch& m) { return byFeature.count(m.featureId); }))
       anchors.push_back(j);
@@ -259,7 +271,7 @@ void CKeyframeSmoother::optimiseWindow()
   // one window has been optimised, every keyframe so far (none is left out of the smoothing while
   // the gauge waits for a baseline).
   std::size_t unplaced = 0;  // keyframes since the newest placed one
-  while (unplaced < m_keyframes.size() && !m_placed[m_keyframes.size() - 1 - unplaced]) ++unplaced;
+  while (unplaced < m_keyframes.size() && m_placed[m_keyframes.size() - 1 - unplaced] != kPlaced) ++unplaced;
   const std::size_t n = m_stats.optimisations == 0
                             ? m_keyframes.size()
                             : std::min(m_keyframes.size(), std::max(m_opts.windowKeyframes,
@@ -301,9 +313,10 @@ void CKeyframeSmoother::optimiseWindow()
   {
     std::lock_guard<std::mutex> lk(m_mutex);
     ++m_stats.optimisations;
+    m_optimisedOnce = true;
     for (std::size_t k = 0; k < n; ++k)
     {
-      m_placed[first + k] = 1;
+      m_placed[first + k] = kPlaced;
       if (k == held) continue;
       TSmoothedKeyframe& kf = m_keyframes[first + k];
       kf.smoothedPose = p.poses[k];

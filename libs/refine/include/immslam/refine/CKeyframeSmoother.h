@@ -8,6 +8,7 @@
 #include <immslam/math/types.h>
 #include <immslam/refine/bundle_adjust.h>
 
+#include <atomic>
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
@@ -83,7 +84,8 @@ struct TSmootherStats
  * Threads: addFrame() only moves the frame into a queue under a mutex; a worker thread takes the
  * queued frames one by one, picks keyframes and optimises the window at every keyframe (skipped
  * while it is behind by more than TOptions::maxBacklogFrames; the next window then reaches back over
- * the keyframes skipped, up to twice its size, and a keyframe no window placed is never an anchor). With TOptions::synchronous,
+ * the keyframes skipped, up to twice its size; a keyframe no window placed is never an anchor, and a window
+ * behind a skipped keyframe it could not reach holds its own gauge). With TOptions::synchronous,
  * addFrame() does that work itself. Both give the same result while the worker keeps up. */
 class CKeyframeSmoother
 {
@@ -156,6 +158,11 @@ class CKeyframeSmoother
   /** Lag and CPU time so far. */
   TSmootherStats stats() const;
 
+  /** Whether the filter's depth sigmas (TSmootherMatch::depthRelSigma) are still read: only until
+   * the first window has been optimised (TOptions::startDepthRelSigma). The caller can skip
+   * computing them afterwards; frames handed over since are never read for them. */
+  bool wantsDepths() const { return m_opts.startDepthRelSigma > 0 && !m_optimisedOnce.load(); }
+
  private:
   void run();
   /** Picks keyframes among `frame`; \return true if it became one. Worker or synchronous caller. */
@@ -197,9 +204,12 @@ class CKeyframeSmoother
   std::vector<std::optional<core::TStampedPose>> m_frameRefined;
   std::vector<std::size_t> m_frameKeyframe;      ///< index into m_keyframes (or npos: none yet)
   std::vector<TSmoothedKeyframe> m_keyframes;
-  std::vector<char> m_placed;  ///< per keyframe: in an optimised window (optimised, or held as its gauge)
+  /** Per keyframe: in an optimised window (optimised, or held as its gauge), not yet, or skipped by
+   * the worker while behind (and not placed since). */
+  std::vector<char> m_placed;
   std::size_t m_given = 0;                ///< frames given to addFrame()
   TSmootherStats m_stats;
+  std::atomic<bool> m_optimisedOnce{false};  ///< m_stats.optimisations > 0 (read without the lock)
   std::thread m_thread;
 };
 }  // namespace immslam::refine
