@@ -272,10 +272,20 @@ void CKeyframeSmoother::optimiseWindow()
   // the gauge waits for a baseline).
   std::size_t unplaced = 0;  // keyframes since the newest placed one
   while (unplaced < m_keyframes.size() && m_placed[m_keyframes.size() - 1 - unplaced] != kPlaced) ++unplaced;
-  const std::size_t n = m_stats.optimisations == 0
-                            ? m_keyframes.size()
-                            : std::min(m_keyframes.size(), std::max(m_opts.windowKeyframes,
-                                                                    std::min(unplaced + 1, 2 * m_opts.windowKeyframes)));
+  bool isLong = false;
+  std::size_t n = m_stats.optimisations == 0
+                      ? m_keyframes.size()
+                      : std::min(m_keyframes.size(),
+                                 std::max(m_opts.windowKeyframes, std::min(unplaced + 1, 2 * m_opts.windowKeyframes)));
+  // A long window now and then: the short windows never move a keyframe once it anchors them, and a
+  // drift that builds up slowly over hundreds of frames stays in their poses.
+  if (m_opts.longWindowEvery > 0 && m_stats.optimisations > 0 &&
+      m_keyframes.size() >= m_longWindowAt + m_opts.longWindowEvery)
+  {
+    n = std::max(n, std::min(m_keyframes.size(), m_opts.longWindowKeyframes));
+    m_longWindowAt = m_keyframes.size();
+    isLong = true;
+  }
   if (n < 2) return;
   const std::size_t first = m_keyframes.size() - n;
   std::vector<std::size_t> anchors;
@@ -302,6 +312,8 @@ void CKeyframeSmoother::optimiseWindow()
   bo.huberPx = m_opts.huberPx;
   bo.maxIterations = m_opts.maxIterations;
   if (anchors.size() < 2) bo.maxIterations = m_opts.gaugeMaxIterations;
+  // A long window starts from the poses the short windows placed (and those of the run's start too).
+  if (isLong) bo.maxIterations = m_opts.longWindowMaxIterations;
   for (std::size_t a = 0; a < anchors.size(); ++a) bo.heldPoses.push_back(n + a);
   if (held != kNone)
   {

@@ -52,6 +52,7 @@ CKeyframeSmoother::TOptions testOptions(bool synchronous, std::size_t maxBacklog
   CKeyframeSmoother::TOptions o;
   o.maxBacklogFrames = maxBacklog;
   o.windowKeyframes = 10;
+  o.longWindowEvery = 0;  // short windows alone (ALongWindowNowAndThenTakesOutASlowDrift)
   o.synchronous = synchronous;
   return o;
 }
@@ -274,4 +275,38 @@ TEST(KeyframeSmoother, TheStartWaitsUntilTheFilterHasSeenTheCameraMove)
   EXPECT_LT(startWaits, 0.5 * startAtOnce);
   EXPECT_LT(startWaits, 0.012);
   EXPECT_LT(allWaits, allAtOnce);
+}
+
+TEST(KeyframeSmoother, ALongWindowNowAndThenTakesOutASlowDrift)
+{
+  // A camera travelling along a wall of points, each in view for 40-80 frames: short windows fix a
+  // keyframe as soon as it anchors the windows after it, and the scale and heading drift of a
+  // visual odometry builds up over the run; a window three times as long every 30 keyframes moves
+  // the keyframes of the last 90 together.
+  test::TScene s;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> ux(-3, 15), uy(-1.5, 1.5), uz(3, 8);
+  for (int j = 0; j < 80; ++j) s.points.emplace_back(ux(rng), uy(rng), uz(rng));
+  for (int i = 0; i < 240; ++i)
+  {
+    core::TStampedPose p;
+    p.timestamp = 0.1 * i;
+    p.p_W_C = Vec3(0.05 * i, 0.1 * std::sin(0.1 * i), 0.2 * std::sin(0.03 * i));
+    p.q_W_C = math::quatFromRotationVector(Vec3(0.02 * std::sin(0.07 * i), 0.03 * std::sin(0.05 * i), 0));
+    s.poses.push_back(p);
+  }
+  const auto frames = filterFrames(s);
+  const auto run = [&](std::size_t every) {
+    CKeyframeSmoother::TOptions o = testOptions(true);
+    o.longWindowEvery = every;
+    o.longWindowKeyframes = 3 * every;
+    CKeyframeSmoother sm(o, kF, kF);
+    for (const auto& f : frames) sm.addFrame(f);
+    sm.finish();
+    return sm.trajectory();
+  };
+  const double shortOnly = test::rmsAfterSim3(run(0), s.poses), withLong = test::rmsAfterSim3(run(30), s.poses);
+  std::printf("ATE after Sim(3): filter %.4f, short windows only %.4f, with a long window every 30 keyframes %.4f\n",
+              test::rmsAfterSim3(poses(frames), s.poses), shortOnly, withLong);
+  EXPECT_LT(withLong, 0.75 * shortOnly);
 }

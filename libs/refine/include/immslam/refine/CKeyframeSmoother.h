@@ -72,7 +72,8 @@ struct TSmootherStats
  * map the windows before placed: its frame and scale, and the features it sees again). Every
  * feature measured by TOptions::minViews of those keyframes is triangulated from the current poses
  * (triangulateAll()), then the window's poses and the points are bundle-adjusted (bundleAdjust(),
- * Huber cost). A window with fewer than two anchors (the run's start, a new map) holds its own gauge:
+ * Huber cost); every TOptions::longWindowEvery keyframes the window is TOptions::longWindowKeyframes
+ * long. A window with fewer than two anchors (the run's start, a new map) holds its own gauge:
  * its earliest keyframe that sees the newest with TOptions::gaugeBaselinePx of parallax is held and
  * the distance between the two kept (TBundleOptions::scalePoses); without such a pair it waits.
  * The run's first window also waits for the filter's map to converge (TOptions::startDepthRelSigma):
@@ -108,6 +109,14 @@ class CKeyframeSmoother
      * filter has then seen the camera move, and its motion between the gauge pair is a scale (an
      * IMM still in its stationary mode while the camera starts slowly has not moved). 0: no wait. */
     double startDepthRelSigma = 0.1;
+    /** Every longWindowEvery keyframes the window reaches back longWindowKeyframes keyframes (a
+     * longer fixed lag, run less often): a keyframe that anchors later windows is never moved by
+     * them, so a slow drift over a few hundred frames stays in the short windows' poses; a long
+     * window spreads it over its span. 0: never. */
+    std::size_t longWindowEvery = 100;
+    std::size_t longWindowKeyframes = 300;  ///< keyframes of a long window (longWindowEvery)
+    /** Iterations of a long window: it starts from the short windows' poses, near its minimum. */
+    int longWindowMaxIterations = 5;
     std::size_t minMatches = 8;        ///< a frame with fewer matches is never a keyframe
     int minViews = 3;                  ///< keyframes that must measure a feature for it to enter the window
     double huberPx = 2;                ///< Huber threshold of the cost (pixels)
@@ -208,6 +217,7 @@ class CKeyframeSmoother
    * the worker while behind (and not placed since). */
   std::vector<char> m_placed;
   std::size_t m_given = 0;                ///< frames given to addFrame()
+  std::size_t m_longWindowAt = 0;         ///< keyframes there were at the last long window (worker)
   TSmootherStats m_stats;
   std::atomic<bool> m_optimisedOnce{false};  ///< m_stats.optimisations > 0 (read without the lock)
   std::thread m_thread;
