@@ -29,6 +29,28 @@ double threadCpuSeconds()
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
+
+/** Motion-only problem `f` (one pose, points held): removes the measurements whose residual exceeds
+ * 3 times the median residual (at least 0.5 px; for a Gaussian error 3.5 sigma, 0.2 % of good
+ * measurements), as long as minKept measurements stay. \return whether any was removed. */
+bool dropOutlyingMeasurements(TBundleProblem& f, std::size_t minKept)
+{
+  const Mat3 R_CW = math::quatToRotation(f.poses[0].q_W_C).transpose();
+  const Vec3 t_CW = -R_CW * f.poses[0].p_W_C;
+  std::vector<double> res(f.obs.size(), std::numeric_limits<double>::infinity());
+  for (std::size_t k = 0; k < f.obs.size(); ++k)
+  {
+    Vec2 r;
+    if (reprojectionResidual(R_CW, t_CW, f.points[f.obs[k].point], f.obs[k].xn, f.fx, f.fy, r)) res[k] = r.norm();
+  }
+  const double limit = std::max(0.5, 3 * eval::median(res));
+  std::vector<TBundleObservation> kept;
+  for (std::size_t k = 0; k < f.obs.size(); ++k)
+    if (res[k] <= limit) kept.push_back(f.obs[k]);
+  if (kept.size() == f.obs.size() || kept.size() < minKept) return false;
+  f.obs = std::move(kept);
+  return true;
+}
 }  // namespace
 
 CKeyframeSmoother::CKeyframeSmoother(const TOptions& opts, double fx, double fy) : m_opts(opts), m_fx(fx), m_fy(fy)
@@ -370,7 +392,17 @@ void CKeyframeSmoother::refineFrames(std::size_t firstFrame, const TBundleProble
     bo.huberPx = m_opts.huberPx;
     bo.maxIterations = 10;
     bo.holdPoints = true;
+    const core::TStampedPose start = f.poses[0];
     bundleAdjust(f, bo);
+    // One frame's pose rests on a few dozen points: a single one the window placed badly (a point
+    // its keyframes measured some pixels from where this frame sees it) can still pull it along the
+    // direction the others determine least, Huber cost or not. Measurements far outside the
+    // frame's own residual spread are left out and the frame refined again.
+    if (dropOutlyingMeasurements(f, m_opts.minMatches))
+    {
+      f.poses[0] = start;
+      bundleAdjust(f, bo);
+    }
     std::lock_guard<std::mutex> lk(m_mutex);
     m_frameRefined[i] = f.poses[0];
   }

@@ -80,7 +80,8 @@ struct TSmootherStats
  * before, the filter may not have seen the camera move, and its motion gives the gauge pair no
  * distance.
  * A keyframe leaving the window keeps its last smoothed pose. Then every frame of the window that is
- * not a keyframe is refined alone against the window's points, held (a motion-only adjustment).
+ * not a keyframe is refined alone against the window's points, held (a motion-only adjustment, run
+ * again without the measurements beyond 3 times the frame's median residual).
  *
  * Threads: addFrame() only moves the frame into a queue under a mutex; a worker thread takes the
  * queued frames one by one, picks keyframes and optimises the window at every keyframe (skipped
@@ -195,7 +196,8 @@ class CKeyframeSmoother
   /** Bundle-adjusts the window and publishes its poses. */
   void optimiseWindow();
   /** Every frame from `firstFrame` on that is not a keyframe: its pose refined against the
-   * window's points (held), from its keyframe's smoothed pose composed with the filter's motion. */
+   * window's points (held), from its keyframe's smoothed pose composed with the filter's motion;
+   * then again without the measurements far outside the frame's residual spread. */
   void refineFrames(std::size_t firstFrame, const TBundleProblem& window);
 
   TOptions m_opts;
