@@ -35,18 +35,12 @@ double threadCpuSeconds()
  * measurements), as long as minKept measurements stay. \return whether any was removed. */
 bool dropOutlyingMeasurements(TBundleProblem& f, std::size_t minKept)
 {
-  const Mat3 R_CW = math::quatToRotation(f.poses[0].q_W_C).transpose();
-  const Vec3 t_CW = -R_CW * f.poses[0].p_W_C;
-  std::vector<double> res(f.obs.size(), std::numeric_limits<double>::infinity());
-  for (std::size_t k = 0; k < f.obs.size(); ++k)
-  {
-    Vec2 r;
-    if (reprojectionResidual(R_CW, t_CW, f.points[f.obs[k].point], f.obs[k].xn, f.fx, f.fy, r)) res[k] = r.norm();
-  }
+  // One point per measurement (refineFrames()): a point's RMS is its measurement's residual.
+  const std::vector<double> res = reprojectionStats(f).featureRmsPx;
   const double limit = std::max(0.5, 3 * eval::median(res));
   std::vector<TBundleObservation> kept;
-  for (std::size_t k = 0; k < f.obs.size(); ++k)
-    if (res[k] <= limit) kept.push_back(f.obs[k]);
+  for (const auto& o : f.obs)
+    if (res[o.point] <= limit) kept.push_back(o);
   if (kept.size() == f.obs.size() || kept.size() < minKept) return false;
   f.obs = std::move(kept);
   return true;
