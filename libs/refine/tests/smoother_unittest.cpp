@@ -64,14 +64,21 @@ core::TTrajectory poses(const std::vector<TSmootherFrame>& frames)
   return t;
 }
 
-core::TTrajectory smooth(const std::vector<TSmootherFrame>& frames, bool synchronous, TSmootherStats* stats = nullptr,
-                         std::size_t maxBacklog = 1000)
+/** Every frame through a smoother with options `o`, then its trajectory (and its stats). */
+core::TTrajectory smoothWith(const std::vector<TSmootherFrame>& frames, const CKeyframeSmoother::TOptions& o,
+                             TSmootherStats* stats = nullptr)
 {
-  CKeyframeSmoother sm(testOptions(synchronous, maxBacklog), kF, kF);
+  CKeyframeSmoother sm(o, kF, kF);
   for (const auto& f : frames) sm.addFrame(f);
   sm.finish();
   if (stats) *stats = sm.stats();
   return sm.trajectory();
+}
+
+core::TTrajectory smooth(const std::vector<TSmootherFrame>& frames, bool synchronous, TSmootherStats* stats = nullptr,
+                         std::size_t maxBacklog = 1000)
+{
+  return smoothWith(frames, testOptions(synchronous, maxBacklog), stats);
 }
 }  // namespace
 
@@ -138,13 +145,11 @@ TEST(KeyframeSmoother, TheWorkerThreadSmoothesAndStopsCleanly)
   {
     CKeyframeSmoother::TOptions o = testOptions(false, 5);
     o.waitWhenBehind = true;
-    CKeyframeSmoother sm(o, kF, kF);
-    for (const auto& f : frames) sm.addFrame(f);
-    sm.finish();
-    const core::TTrajectory w = sm.trajectory();
+    TSmootherStats waited;
+    const core::TTrajectory w = smoothWith(frames, o, &waited);
     ASSERT_EQ(w.size(), reference.size());
     for (std::size_t i = 0; i < w.size(); ++i) EXPECT_EQ(w[i].p_W_C, reference[i].p_W_C) << i;
-    EXPECT_EQ(sm.stats().optimisations, st.optimisations);
+    EXPECT_EQ(waited.optimisations, st.optimisations);
   }
   // Destroyed while frames are queued and without finish(): the destructor drains and joins.
   {
@@ -206,10 +211,7 @@ TEST(KeyframeSmoother, AnchorsHoldTheScaleOfTheMapAcrossWindows)
     CKeyframeSmoother::TOptions o = testOptions(true);
     o.windowKeyframes = 6;
     o.anchorKeyframes = anchors;
-    CKeyframeSmoother sm(o, kF, kF);
-    for (const auto& f : frames) sm.addFrame(f);
-    sm.finish();
-    return test::rmsAfterSim3(sm.trajectory(), s.poses);
+    return test::rmsAfterSim3(smoothWith(frames, o), s.poses);
   };
   const double without = run(0), with = run(40);
   std::printf("ATE after Sim(3), windows of 6: no anchors %.4f, 40 anchors %.4f\n", without, with);
@@ -261,10 +263,7 @@ TEST(KeyframeSmoother, TheStartWaitsUntilTheFilterHasSeenTheCameraMove)
   const auto run = [&](double relSigma) {
     CKeyframeSmoother::TOptions o = testOptions(true);
     o.startDepthRelSigma = relSigma;
-    CKeyframeSmoother sm(o, kF, kF);
-    for (const auto& f : frames) sm.addFrame(f);
-    sm.finish();
-    return sm.trajectory();
+    return smoothWith(frames, o);
   };
   const core::TTrajectory waits = run(0.1), atOnce = run(0.0);
   const double startWaits = test::rmsAfterSim3(firstFrames(waits, 30), firstFrames(s.poses, 30));
@@ -300,10 +299,7 @@ TEST(KeyframeSmoother, ALongWindowNowAndThenTakesOutASlowDrift)
     CKeyframeSmoother::TOptions o = testOptions(true);
     o.longWindowEvery = every;
     o.longWindowKeyframes = 3 * every;
-    CKeyframeSmoother sm(o, kF, kF);
-    for (const auto& f : frames) sm.addFrame(f);
-    sm.finish();
-    return sm.trajectory();
+    return smoothWith(frames, o);
   };
   const double shortOnly = test::rmsAfterSim3(run(0), s.poses), withLong = test::rmsAfterSim3(run(30), s.poses);
   std::printf("ATE after Sim(3): filter %.4f, short windows only %.4f, with a long window every 30 keyframes %.4f\n",
