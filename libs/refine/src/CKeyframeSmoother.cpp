@@ -52,6 +52,7 @@ CKeyframeSmoother::CKeyframeSmoother(const TOptions& opts, double fx, double fy)
   if (m_opts.windowKeyframes < 2) throw std::invalid_argument("CKeyframeSmoother: windowKeyframes must be >= 2");
   if (!(m_opts.gaugeBaselinePx > 0)) throw std::invalid_argument("CKeyframeSmoother: gaugeBaselinePx must be > 0");
   if (m_opts.minViews < 2) throw std::invalid_argument("CKeyframeSmoother: minViews must be >= 2");
+  if (m_opts.windowEvery < 1) throw std::invalid_argument("CKeyframeSmoother: windowEvery must be >= 1");
   if (!m_opts.synchronous) m_thread = std::thread([this] { run(); });
 }
 
@@ -76,7 +77,7 @@ void CKeyframeSmoother::addFrame(TSmootherFrame frame)
       std::lock_guard<std::mutex> lk(m_mutex);
       ++m_given;
     }
-    if (ingest(std::move(frame))) optimiseWindow();
+    step(std::move(frame), 0);
     std::lock_guard<std::mutex> lk(m_mutex);
     m_stats.cpuSeconds += threadCpuSeconds() - c0;
     return;
@@ -97,7 +98,6 @@ void CKeyframeSmoother::run()
   // The worker yields the CPU to the filter's thread when they compete (Linux: a per-thread nice).
   if (m_opts.workerNice > 0) setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), m_opts.workerNice);
   const double c0 = threadCpuSeconds();
-  bool pending = false;  // a keyframe arrived whose optimisation was skipped
   for (;;)
   {
     TSmootherFrame frame;
@@ -111,34 +111,47 @@ void CKeyframeSmoother::run()
       m_room.notify_one();
       backlog = m_queue.size();
     }
-    // Frames are taken one by one and the window optimised at every keyframe, as in a synchronous
-    // run (same result), unless the worker is behind by more than maxBacklogFrames: then the
-    // optimisation is left to a later keyframe (the lag stays bounded, the filter never waits).
-    const bool newKeyframe = ingest(std::move(frame));
-    pending = newKeyframe || pending;
-    if (pending && backlog <= m_opts.maxBacklogFrames)
-    {
-      optimiseWindow();
-      pending = false;
-    }
-    else if (newKeyframe)
-    {
-      std::lock_guard<std::mutex> lk(m_mutex);
-      m_placed.back() = kSkipped;
-    }
+    step(std::move(frame), backlog);
     std::lock_guard<std::mutex> lk(m_mutex);
     m_stats.cpuSeconds = threadCpuSeconds() - c0;
   }
-  if (pending) optimiseWindow();
+  if (m_windowPending) optimiseWindow();
   std::lock_guard<std::mutex> lk(m_mutex);
   m_stats.cpuSeconds = threadCpuSeconds() - c0;
+}
+
+void CKeyframeSmoother::step(TSmootherFrame&& frame, std::size_t backlog)
+{
+  // Frames are taken one by one and the window optimised at every windowEvery-th keyframe, as in a
+  // synchronous run (same result), unless the worker is behind by more than maxBacklogFrames: then
+  // the optimisation is left to a later frame (the lag stays bounded, the filter never waits).
+  const bool newKeyframe = ingest(std::move(frame));
+  m_windowPending = newKeyframe || m_windowPending;
+  m_keyframesSinceWindow += newKeyframe ? 1 : 0;
+  if (m_windowPending && m_keyframesSinceWindow >= m_opts.windowEvery && backlog <= m_opts.maxBacklogFrames)
+  {
+    optimiseWindow();
+    m_windowPending = false;
+    m_keyframesSinceWindow = 0;
+  }
+  else if (newKeyframe && backlog > m_opts.maxBacklogFrames)
+  {
+    std::lock_guard<std::mutex> lk(m_mutex);
+    m_placed.back() = kSkipped;
+  }
 }
 
 void CKeyframeSmoother::finish()
 {
   if (m_opts.synchronous)
   {
+    if (m_finished) return;
     m_finished = true;
+    const double c0 = threadCpuSeconds();
+    if (m_windowPending) optimiseWindow();
+    m_windowPending = false;
+    std::lock_guard<std::mutex> lk(m_mutex);
+    m_stats.cpuSeconds += threadCpuSeconds() - c0;
     return;
   }
   {

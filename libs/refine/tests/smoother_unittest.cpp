@@ -97,13 +97,40 @@ TEST(KeyframeSmoother, SmoothedPosesAreCloserToTheTruthThanTheFilters)
   EXPECT_LT(after, 0.5 * before);
   EXPECT_EQ(st.frames, s.poses.size());
   EXPECT_GE(st.keyframes, 120u / 4);
-  // Synchronous: each keyframe is optimised in the call that hands it over, once the first window
-  // has found its gauge (a pair of keyframes gaugeBaselinePx apart: the first keyframes wait).
+  // Synchronous: a window is optimised in the call that hands over every windowEvery-th keyframe,
+  // once the first window has found its gauge (a pair of keyframes gaugeBaselinePx apart: the first
+  // keyframes wait). Every frame of this camera is a keyframe: one waits windowEvery - 1 frames at most.
+  const std::size_t every = testOptions(true).windowEvery;
+  ASSERT_EQ(every, 3u);
+  EXPECT_EQ(st.keyframes, s.poses.size());
+  EXPECT_NEAR(static_cast<double>(st.optimisations), static_cast<double>(st.keyframes) / every, 2.0);
+  ASSERT_FALSE(st.lagFrames.empty());
+  std::size_t waited = 0;
+  while (waited < st.lagFrames.size() && st.lagFrames[waited] > every - 1) ++waited;
+  EXPECT_LE(waited, 10u);
+  for (std::size_t i = waited; i < st.lagFrames.size(); ++i) EXPECT_LE(st.lagFrames[i], every - 1.0) << i;
+}
+
+TEST(KeyframeSmoother, AWindowAtEveryKeyframeLeavesNoLag)
+{
+  // windowEvery = 1: each keyframe is optimised in the call that hands it over, once the first
+  // window has found its gauge; the result differs little from windowEvery = 3.
+  const test::TScene s = test::makeScene(120, 60);
+  const auto frames = filterFrames(s);
+  CKeyframeSmoother::TOptions o = testOptions(true);
+  o.windowEvery = 1;
+  TSmootherStats st, st3;
+  const core::TTrajectory each = smoothWith(frames, o, &st);
+  const core::TTrajectory third = smooth(frames, true, &st3);
   ASSERT_FALSE(st.lagFrames.empty());
   std::size_t waited = 0;
   for (const double lag : st.lagFrames) waited += lag > 0 ? 1 : 0;
   EXPECT_LE(waited, 10u);
   for (std::size_t i = waited; i < st.lagFrames.size(); ++i) EXPECT_EQ(st.lagFrames[i], 0.0) << i;
+  EXPECT_GE(st.optimisations, 3 * st3.optimisations - 6);
+  const double rmsEach = test::rmsAfterSim3(each, s.poses), rmsThird = test::rmsAfterSim3(third, s.poses);
+  std::printf("ATE after Sim(3): a window at every keyframe %.4f, at every third %.4f\n", rmsEach, rmsThird);
+  EXPECT_LT(rmsThird, 1.25 * rmsEach);
 }
 
 TEST(KeyframeSmoother, ASynchronousRunIsDeterministic)
@@ -172,8 +199,11 @@ TEST(KeyframeSmoother, PublishesKeyframesWhileRunningAndRefusesFramesAfterFinish
   ASSERT_GE(kfs.size(), 10u);
   EXPECT_EQ(kfs[0].frame, 0u);
   EXPECT_FALSE(kfs[0].optimised);  // held: the gauge
-  EXPECT_TRUE(kfs.back().optimised);
+  // The window is optimised at every windowEvery-th keyframe: the newest may still wait for theirs.
+  const std::size_t every = testOptions(true).windowEvery;
+  EXPECT_TRUE(kfs[kfs.size() - every].optimised);
   sm.finish();
+  EXPECT_TRUE(sm.keyframes().back().optimised);  // finish() optimises the last window
   EXPECT_THROW(sm.addFrame(frames[0]), std::logic_error);
   CKeyframeSmoother::TOptions bad;
   bad.windowKeyframes = 1;

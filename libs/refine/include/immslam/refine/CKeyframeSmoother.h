@@ -84,7 +84,8 @@ struct TSmootherStats
  * again without the measurements beyond 3 times the frame's median residual).
  *
  * Threads: addFrame() only moves the frame into a queue under a mutex; a worker thread takes the
- * queued frames one by one, picks keyframes and optimises the window at every keyframe (skipped
+ * queued frames one by one, picks keyframes and optimises the window at every
+ * TOptions::windowEvery-th keyframe (skipped
  * while it is behind by more than TOptions::maxBacklogFrames; the next window then reaches back over
  * the keyframes skipped, up to twice its size; a keyframe no window placed is never an anchor, and a window
  * behind a skipped keyframe it could not reach holds its own gauge). With TOptions::synchronous,
@@ -95,6 +96,10 @@ class CKeyframeSmoother
   struct TOptions
   {
     std::size_t windowKeyframes = 20;  ///< keyframes optimised together
+    /** The window is optimised at every windowEvery-th keyframe (and at finish()): each keyframe
+     * still takes part in about windowKeyframes / windowEvery optimisations, and the smoother's CPU
+     * time falls by about that factor (doc/estimator.md). 1: at every keyframe. */
+    std::size_t windowEvery = 3;
     /** Keyframes before the window that measured its features, held in its optimisation (newest
      * first): the window continues the map of the windows before it. */
     std::size_t anchorKeyframes = 40;
@@ -177,6 +182,9 @@ class CKeyframeSmoother
   void run();
   /** Picks keyframes among `frame`; \return true if it became one. Worker or synchronous caller. */
   bool ingest(TSmootherFrame&& frame);
+  /** Takes `frame` in and optimises the window when one is due (TOptions::windowEvery) and the
+   * worker is no more than TOptions::maxBacklogFrames behind (`backlog`: frames still queued). */
+  void step(TSmootherFrame&& frame, std::size_t backlog);
   /** Per feature frame B (pose, matches) shares with frame A: its bearing change once the filter's
    * rotation between the two is taken out (pixels). */
   std::vector<double> parallaxPx(const core::TStampedPose& poseA, const std::vector<TSmootherMatch>& a,
@@ -220,6 +228,8 @@ class CKeyframeSmoother
   std::vector<char> m_placed;
   std::size_t m_given = 0;                ///< frames given to addFrame()
   std::size_t m_longWindowAt = 0;         ///< keyframes there were at the last long window (worker)
+  std::size_t m_keyframesSinceWindow = 0; ///< keyframes since the last window optimisation (worker)
+  bool m_windowPending = false;           ///< a keyframe came whose window is not optimised yet (worker)
   TSmootherStats m_stats;
   std::atomic<bool> m_optimisedOnce{false};  ///< m_stats.optimisations > 0 (read without the lock)
   std::thread m_thread;
