@@ -65,7 +65,7 @@ struct TOutputOptions : public mrpt::config::CLoadableOptions
   int gui_scene_every_n = 10;  ///< live 3-D window refresh period (frames), when windows are open
   bool search_log = false;  ///< searches.csv (and shadow_log.csv): every search / shadow feature of every frame
   bool refine_trajectory = false;  ///< trajectory_refined.txt: a bundle adjustment of the run's own matches at the end
-  bool smooth_trajectory = false;  ///< trajectory_smoothed.txt: the online keyframe smoother (its own thread)
+  bool smooth_trajectory = true;  ///< trajectory_smoothed.txt: the online keyframe smoother (its own thread)
 
   void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
   void saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& s) const override;
