@@ -11,6 +11,7 @@ void TInputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, c
   IMMSLAM_LOAD_STRING(source);
   IMMSLAM_LOAD_STRING(scenario);
   IMMSLAM_LOAD_DOUBLE(live_frame_rate_hz);
+  IMMSLAM_LOAD_BOOL(live_paced);
   IMMSLAM_LOAD_STRING(rawlog_sensor_label);
   IMMSLAM_LOAD_INT(max_image_width);
   IMMSLAM_LOAD_STRING(exclusion_masks);
@@ -34,6 +35,7 @@ void TInputOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std
   MRPT_SAVE_CONFIG_VAR_COMMENT(source, "synthetic | path of a .rawlog or dataset folder");
   MRPT_SAVE_CONFIG_VAR_COMMENT(scenario, "scenario of the synthetic source (empty: built-in default)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(live_frame_rate_hz, "frame rate of live sources without timestamps");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(live_paced, "--live: deliver a replay of files (image_dir, ffmpeg on a file, rawlog) at its frame rate, as the camera would");
   MRPT_SAVE_CONFIG_VAR_COMMENT(rawlog_sensor_label, "camera (sensorLabel) of a rawlog with several (empty: the first)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(max_image_width, "wider images are processed at 1/2, 1/4, ... size (0: never, the default)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(exclusion_masks, "folder with rgb.txt and masks/: per-frame masks of pixels with no new feature or SLAM match (empty: none)");

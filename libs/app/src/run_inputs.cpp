@@ -122,6 +122,7 @@ void openLiveSource(const TRunContext& ctx, TRunInputs& in, std::atomic<io::CLiv
   const auto [ini, section] = io::splitLiveSpec(ctx.args.live);
   io::TLiveOptions lo;
   lo.frameRateHz = in.in.live_frame_rate_hz;
+  lo.paced = in.in.live_paced;
   lo.camera = in.cam;
   auto owned = std::make_unique<io::CLiveCameraSource>(ini, section, lo);
   io::CLiveCameraSource& src = *owned;

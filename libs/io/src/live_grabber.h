@@ -12,11 +12,13 @@
 #include <mrpt/obs/CObservation.h>
 
 #include <atomic>
+#include <chrono>
 #include <deque>
 #include <exception>
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 namespace immslam::io
 {
@@ -41,6 +43,8 @@ struct CLiveCameraSource::Impl : detail::TLiveSection
   std::size_t nextIndex = 0;    ///< next TFrame::index
   std::size_t imageCount = 0;   ///< image observations met (FrameIndex time)
   std::size_t delivered = 0;
+  /** TLiveOptions::paced: the steady-clock time and the timestamp of the first frame delivered. */
+  std::optional<std::pair<std::chrono::steady_clock::time_point, double>> paceOrigin;
   bool ended = false;
   std::string endWhy;
 

@@ -253,6 +253,41 @@ TEST(LiveImageDir, EndsAtFirstMissingImageAndRateOption)
   EXPECT_NE(s.endWhy.find("img_00005.png"), std::string::npos) << s.endWhy;
 }
 
+TEST(LiveImageDir, APacedReplayComesNoFasterThanItsFrameRate)
+{
+  // TLiveOptions::paced: frame n is delivered no earlier than n / f after the first (a camera's
+  // pace); the frames themselves are those of an unpaced replay.
+  TempDir tmp;
+  writeImageDir(tmp / "seq", 0, 7);
+  writeText(tmp / "grab.ini", imageDirIni(tmp / "seq", 0, 6, ""));
+  TLiveOptions o;
+  o.frameRateHz = 20;
+  o.paced = true;
+  CLiveCameraSource src(tmp / "grab.ini", "CAMERA", o);
+  std::vector<std::chrono::steady_clock::time_point> at;
+  std::vector<double> stamps;
+  TFrame f;
+  std::string why;
+  for (ENextStatus st; (st = src.next(f, why)) != ENextStatus::End;)
+    if (st == ENextStatus::Frame)
+    {
+      at.push_back(std::chrono::steady_clock::now());
+      stamps.push_back(f.timestamp);
+    }
+  ASSERT_EQ(at.size(), 7u) << why;
+  for (std::size_t i = 1; i < at.size(); ++i)
+  {
+    EXPECT_NEAR(stamps[i], static_cast<double>(i) / 20, 1e-12);
+    EXPECT_GE(std::chrono::duration<double>(at[i] - at[0]).count(), stamps[i] - stamps[0] - 1e-3) << i;
+  }
+  TLiveOptions unpaced = o;
+  unpaced.paced = false;
+  CLiveCameraSource plain(tmp / "grab.ini", "CAMERA", unpaced);
+  const TStream s = readAll(plain);
+  ASSERT_EQ(s.frames.size(), 7u);
+  for (std::size_t i = 0; i < s.frames.size(); ++i) EXPECT_EQ(s.frames[i].timestamp, stamps[i]);
+}
+
 TEST(LiveImageDir, SourceTimestampsGreyCaptureStereoLeftAndSizeWarning)
 {
   TempDir tmp;

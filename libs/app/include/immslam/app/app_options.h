@@ -17,6 +17,7 @@ struct TInputOptions : public mrpt::config::CLoadableOptions
   std::string scenario;
   /** Frame rate assumed for live sources without timestamps (image_dir, ffmpeg). */
   double live_frame_rate_hz = 30;
+  bool live_paced = false;          ///< --live: deliver a replayed source (image_dir, ffmpeg file, rawlog) at its frame rate
   /** The camera of a rawlog holding the images of several sensors (their `sensorLabel`); empty: the
    * first one in the file (io::CRawlogSource). */
   std::string rawlog_sensor_label;

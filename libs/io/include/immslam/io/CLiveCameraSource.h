@@ -59,6 +59,11 @@ struct TLiveOptions
    * stream; 0 = automatic: 1 when `ffmpeg_url` is a local file (an empty grab is its end of file),
    * 50 for a network stream (temporary failures are retried). */
   std::size_t maxEmptyGrabs = 0;
+  /** Deliver each frame no earlier than its timestamp's distance from the first frame's (steady
+   * clock, from the first delivery): a replay of files (`image_dir`, `ffmpeg` on a file, `rawlog`)
+   * then comes at its recorded or nominal rate, as the camera would deliver it, to see how the
+   * estimator keeps up in real time. A device delivers at its own rate either way. */
+  bool paced = false;
   /** Reject keys of the section that neither CCameraSensor nor CGenericSensor reads (the MRPT ini
    * parser ignores them silently), naming them. Keys prefixed by another grabber's name
    * (`dc1394_`, `flycap_`, `kinect_`, ...) are always accepted. */
@@ -168,6 +173,9 @@ class CLiveCameraSource : public CImageSource
   std::size_t framesDelivered() const;
 
  private:
+  /** TLiveOptions::paced: waits until the frame with this timestamp is due. */
+  void pace(double timestamp);
+
   struct Impl;
   std::unique_ptr<Impl> m_impl;
   std::atomic<bool> m_stopRequested{false};
