@@ -115,7 +115,7 @@ void CKeyframeSmoother::run()
     std::lock_guard<std::mutex> lk(m_mutex);
     m_stats.cpuSeconds = threadCpuSeconds() - c0;
   }
-  if (m_windowPending) optimiseWindow();
+  if (m_keyframesSinceWindow > 0) optimiseWindow();
   std::lock_guard<std::mutex> lk(m_mutex);
   m_stats.cpuSeconds = threadCpuSeconds() - c0;
 }
@@ -126,12 +126,10 @@ void CKeyframeSmoother::step(TSmootherFrame&& frame, std::size_t backlog)
   // synchronous run (same result), unless the worker is behind by more than maxBacklogFrames: then
   // the optimisation is left to a later frame (the lag stays bounded, the filter never waits).
   const bool newKeyframe = ingest(std::move(frame));
-  m_windowPending = newKeyframe || m_windowPending;
   m_keyframesSinceWindow += newKeyframe ? 1 : 0;
-  if (m_windowPending && m_keyframesSinceWindow >= m_opts.windowEvery && backlog <= m_opts.maxBacklogFrames)
+  if (m_keyframesSinceWindow >= m_opts.windowEvery && backlog <= m_opts.maxBacklogFrames)
   {
     optimiseWindow();
-    m_windowPending = false;
     m_keyframesSinceWindow = 0;
   }
   else if (newKeyframe && backlog > m_opts.maxBacklogFrames)
@@ -148,8 +146,8 @@ void CKeyframeSmoother::finish()
     if (m_finished) return;
     m_finished = true;
     const double c0 = threadCpuSeconds();
-    if (m_windowPending) optimiseWindow();
-    m_windowPending = false;
+    if (m_keyframesSinceWindow > 0) optimiseWindow();
+    m_keyframesSinceWindow = 0;
     std::lock_guard<std::mutex> lk(m_mutex);
     m_stats.cpuSeconds += threadCpuSeconds() - c0;
     return;

@@ -228,8 +228,8 @@ class CKeyframeSmoother
   std::vector<char> m_placed;
   std::size_t m_given = 0;                ///< frames given to addFrame()
   std::size_t m_longWindowAt = 0;         ///< keyframes there were at the last long window (worker)
-  std::size_t m_keyframesSinceWindow = 0; ///< keyframes since the last window optimisation (worker)
-  bool m_windowPending = false;           ///< a keyframe came whose window is not optimised yet (worker)
+  /** Keyframes since the last window optimisation (worker): more than 0, a window is still due. */
+  std::size_t m_keyframesSinceWindow = 0;
   TSmootherStats m_stats;
   std::atomic<bool> m_optimisedOnce{false};  ///< m_stats.optimisations > 0 (read without the lock)
   std::thread m_thread;
