@@ -5,9 +5,7 @@
 #include "image_convert.h"
 #include "live_grabber.h"
 
-#include <chrono>
 #include <sstream>
-#include <thread>
 #include <stdexcept>
 
 namespace immslam::io
@@ -74,7 +72,7 @@ ENextStatus CLiveCameraSource::next(TFrame& frame, std::string& why)
     const Impl::TPending p = m.pending.front();
     m.pending.pop_front();
     const ENextStatus st = m.frameOf(p, frame, why);
-    if (st == ENextStatus::Frame && m.opts.paced) pace(frame.timestamp);
+    if (st == ENextStatus::Frame && m.opts.paced) m.pace(frame.timestamp);
     return st;
   }
   catch (const std::exception& e)
@@ -83,22 +81,6 @@ ENextStatus CLiveCameraSource::next(TFrame& frame, std::string& why)
     why = m.endWhy;
     return ENextStatus::End;
   }
-}
-
-void CLiveCameraSource::pace(double timestamp)
-{
-  // The frame at timestamp t is delivered t - t0 after the first frame was (a camera's pace); a
-  // consumer slower than that is never waited for.
-  Impl& m = *m_impl;
-  const auto now = std::chrono::steady_clock::now();
-  if (!m.paceOrigin)
-  {
-    m.paceOrigin.emplace(now, timestamp);
-    return;
-  }
-  const auto due = m.paceOrigin->first + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                             std::chrono::duration<double>(timestamp - m.paceOrigin->second));
-  if (due > now) std::this_thread::sleep_until(due);
 }
 
 camera::CCameraModel::Ptr CLiveCameraSource::calibration() const { return m_impl->calib; }

@@ -10,9 +10,11 @@
 #include <mrpt/core/Clock.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <chrono>
 #include <filesystem>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 namespace fs = std::filesystem;
 
@@ -282,5 +284,18 @@ bool CLiveCameraSource::Impl::record(const TFrame& f, mrpt::obs::CObservation& o
     return false;
   }
   return true;
+}
+
+void CLiveCameraSource::Impl::pace(double timestamp)
+{
+  const auto now = std::chrono::steady_clock::now();
+  if (!paceOrigin)
+  {
+    paceOrigin.emplace(now, timestamp);
+    return;
+  }
+  const auto due = paceOrigin->first + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                           std::chrono::duration<double>(timestamp - paceOrigin->second));
+  if (due > now) std::this_thread::sleep_until(due);
 }
 }  // namespace immslam::io

@@ -78,6 +78,9 @@ struct CLiveCameraSource::Impl : detail::TLiveSection
   /** The frame of a grabbed object (next() after the queue): Frame, Skipped (with `why`), or End
    * when recording fails. */
   ENextStatus frameOf(const TPending& p, TFrame& frame, std::string& why);
+  /** TLiveOptions::paced: waits until the frame with this timestamp is due (a camera's pace: the
+   * first frame delivered sets the clock; a consumer slower than that is never waited for). */
+  void pace(double timestamp);
   /** Records a delivered frame (or its raw observation); false (stream ended) on a recording error. */
   bool record(const TFrame& f, mrpt::obs::CObservation& obs);
 };

@@ -173,9 +173,6 @@ class CLiveCameraSource : public CImageSource
   std::size_t framesDelivered() const;
 
  private:
-  /** TLiveOptions::paced: waits until the frame with this timestamp is due. */
-  void pace(double timestamp);
-
   struct Impl;
   std::unique_ptr<Impl> m_impl;
   std::atomic<bool> m_stopRequested{false};
