@@ -268,26 +268,40 @@ TEST(DepthFree, StillCameraDecidesMoversDynamicAndPromotesStillPointsAsRaysOfUnk
   }
 }
 
-TEST(DepthFree, FeaturesBornOnAPausingObjectWaitAmongItsDynamicFeatures)
+namespace
 {
-  // A still camera; an object (six features within 15 px) moves 1.5 px per frame, pauses for 40
-  // frames, then moves back; three new features start on it during the pause, six background
-  // features far from it. While paused, the new features do not move: the classifier alone calls them
-  // static within 15 frames (an object at a turning point, a person standing). Among at least two
-  // dynamic features measured within an eighth of the image width, a static decision waits: the new
-  // features stay pending through the pause and are decided dynamic once the object moves again; the
-  // background is decided static as before.
+/** A still camera; an object (six features within 15 px) moves 1.5 px per frame along x, halts from
+ * frame `haltFrom` to `haltTo`, then moves back; three new features start on it at frame `bornAt`, six
+ * background features far from it. */
+struct THaltingObject
+{
+  int haltFrom = 25, haltTo = 64, bornAt = 30;
+  bool objectLostAtHalt = false;  ///< its six features are no longer measured once it halts
+  int memoryFrames = CShadowFilter::TOptions::kMotionMemoryFrames;
+  std::uint64_t seed = 21;
+};
+
+/** Class and frame of each decision (Pending, -1: none) of the object's, the background's and the
+ * born features. */
+struct THaltingDecisions
+{
+  std::vector<std::pair<EShadowClass, int>> object, background, born;
+};
+
+THaltingDecisions runHaltingObject(const THaltingObject& h)
+{
   const auto cam = test::simCamera();
   CShadowFilter::TOptions o;
+  o.motion_memory_frames = h.memoryFrames;
   CShadowFilter sf(o, cam);
-  Rng rng(21);
+  Rng rng(h.seed);
   std::vector<Vec2> object, background, born;
   for (int i = 0; i < 6; ++i) object.emplace_back(200 + uniform(rng, -15, 15), 120 + uniform(rng, -15, 15));
   for (int i = 0; i < 6; ++i) background.emplace_back(uniform(rng, 20, 90), uniform(rng, 20, 220));
   for (int i = 0; i < 3; ++i) born.emplace_back(uniform(rng, -12, 12), uniform(rng, -12, 12));  // object frame
-  // The object's offset at frame k: moving, paused (frames 25-64), moving back.
-  const auto offset = [](int k) {
-    const double x = k <= 25 ? 1.5 * k : (k <= 64 ? 37.5 : 37.5 - 1.5 * (k - 64));
+  const auto offset = [&](int k) {
+    const double far = 1.5 * h.haltFrom;
+    const double x = k <= h.haltFrom ? 1.5 * k : (k <= h.haltTo ? far : far - 1.5 * (k - h.haltTo));
     return Vec2(x, 0);
   };
   TCameraMotion m;
@@ -300,7 +314,8 @@ TEST(DepthFree, FeaturesBornOnAPausingObjectWaitAmongItsDynamicFeatures)
     m.frame = k;
     m.timestamp = k / 30.0;
     std::vector<std::pair<std::int64_t, Vec2>> z;
-    for (std::size_t i = 0; i < objectIds.size(); ++i) z.emplace_back(objectIds[i], noisy(rng, object[i] + offset(k)));
+    if (!h.objectLostAtHalt || k <= h.haltFrom)
+      for (std::size_t i = 0; i < objectIds.size(); ++i) z.emplace_back(objectIds[i], noisy(rng, object[i] + offset(k)));
     for (std::size_t i = 0; i < backgroundIds.size(); ++i) z.emplace_back(backgroundIds[i], noisy(rng, background[i]));
     const Vec2 centre = Vec2(200, 120) + offset(k);
     for (std::size_t i = 0; i < bornIds.size(); ++i) z.emplace_back(bornIds[i], noisy(rng, centre + born[i]));
@@ -311,31 +326,88 @@ TEST(DepthFree, FeaturesBornOnAPausingObjectWaitAmongItsDynamicFeatures)
       objectIds = sf.addFeatures(object);
       backgroundIds = sf.addFeatures(background);
     }
-    if (k == 30)
+    if (k == h.bornAt)
     {
       std::vector<Vec2> uv;
       for (const auto& b : born) uv.push_back(centre + b);
       bornIds = sf.addFeatures(uv);
     }
   }
-  for (auto id : objectIds)
+  const auto of = [&](const std::vector<std::int64_t>& ids) {
+    std::vector<std::pair<EShadowClass, int>> out;
+    for (auto id : ids) out.push_back(decided.count(id) ? decided[id] : std::make_pair(EShadowClass::Pending, -1));
+    return out;
+  };
+  return {of(objectIds), of(backgroundIds), of(bornIds)};
+}
+
+/** The object is seen moving (dynamic before it halts) and the background decided static within 15 frames. */
+void expectObjectDynamicBackgroundStatic(const THaltingDecisions& d, int haltFrom)
+{
+  for (const auto& [cls, frame] : d.object)
   {
-    ASSERT_TRUE(decided.count(id));
-    EXPECT_EQ(decided[id].first, EShadowClass::Dynamic);
+    EXPECT_EQ(cls, EShadowClass::Dynamic);
+    EXPECT_LE(frame, haltFrom);
   }
-  for (auto id : backgroundIds)
+  for (const auto& [cls, frame] : d.background)
   {
-    ASSERT_TRUE(decided.count(id));
-    EXPECT_EQ(decided[id].first, EShadowClass::Static);
-    EXPECT_LE(decided[id].second, 15);
+    EXPECT_EQ(cls, EShadowClass::Static);
+    EXPECT_LE(frame, 15);
   }
-  for (auto id : bornIds)
+}
+}  // namespace
+
+TEST(DepthFree, FeaturesBornOnAPausingObjectWaitAmongItsDynamicFeatures)
+{
+  // The object pauses for 40 frames (25-64) and its features stay measured; three features start on
+  // it at frame 30. While paused, the new features do not move: the classifier alone calls them
+  // static within 15 frames (an object at a turning point, a person standing). Among at least two
+  // dynamic features measured within an eighth of the image width, a static decision waits: the new
+  // features stay pending through the pause and are decided dynamic once the object moves again; the
+  // background is decided static as before.
+  THaltingObject h;
+  const THaltingDecisions d = runHaltingObject(h);
+  expectObjectDynamicBackgroundStatic(d, h.haltFrom);
+  for (const auto& [cls, frame] : d.born)
   {
-    ASSERT_TRUE(decided.count(id)) << "a feature on the object must be decided once it moves again";
-    std::printf("[ info     ] feature born on the paused object: %s at frame %d\n",
-                shadow::className(decided[id].first).c_str(), decided[id].second);
-    EXPECT_EQ(decided[id].first, EShadowClass::Dynamic);
-    EXPECT_GT(decided[id].second, 64);
+    std::printf("[ info     ] feature born on the paused object: %s at frame %d\n", shadow::className(cls).c_str(), frame);
+    EXPECT_EQ(cls, EShadowClass::Dynamic) << "a feature on the object must be decided once it moves again";
+    EXPECT_GT(frame, h.haltTo);
+  }
+}
+
+TEST(DepthFree, FeaturesBornWhereAnObjectWasLatelySeenMovingWait)
+{
+  // The object halts for 25 frames (25-50) and its features are lost when it halts (patches that stop
+  // matching); three features start on it at frame 27. No dynamic feature is measured in the frames the
+  // born features would be decided in: the same-frame rule (FeaturesBornOnAPausingObjectWait...) cannot
+  // hold them. Without the memory they are decided static while the object stands (measured: frame
+  // 37); with it (TOptions::motion_memory_frames, 30) they wait and are decided dynamic once it moves
+  // again (measured: frames 56-58).
+  THaltingObject h;
+  h.haltTo = 50;
+  h.bornAt = 27;
+  h.objectLostAtHalt = true;
+  h.seed = 33;
+  h.memoryFrames = 0;
+  const THaltingDecisions without = runHaltingObject(h);
+  expectObjectDynamicBackgroundStatic(without, h.haltFrom);
+  for (const auto& [cls, frame] : without.born)
+  {
+    std::printf("[ info     ] without the memory, born on the halted object: %s at frame %d\n",
+                shadow::className(cls).c_str(), frame);
+    EXPECT_EQ(cls, EShadowClass::Static) << "the case the memory is for: still, and no dynamic neighbour measured";
+    EXPECT_LT(frame, h.haltTo);
+  }
+  h.memoryFrames = CShadowFilter::TOptions::kMotionMemoryFrames;
+  const THaltingDecisions with = runHaltingObject(h);
+  expectObjectDynamicBackgroundStatic(with, h.haltFrom);
+  for (const auto& [cls, frame] : with.born)
+  {
+    std::printf("[ info     ] with the memory, born on the halted object: %s at frame %d\n",
+                shadow::className(cls).c_str(), frame);
+    EXPECT_EQ(cls, EShadowClass::Dynamic);
+    EXPECT_GT(frame, h.haltTo);
   }
 }
 }  // namespace immslam::shadow
