@@ -264,8 +264,8 @@ void CShadowFilter::classifyAndManage()
   // Where motion was seen lately: while the camera does not translate (the bank's stationary and
   // rotation families), a static decision there waits until the feature's track is as long as that
   // memory, so that a mover seen still for a while (a turning point, a pause) moves again first. Then
-  // the decision is the depth-free test's and a watched feature decided static is retired, so waiting
-  // costs the map nothing; with translation it would hold back features SLAM needs.
+  // the decision is the depth-free test's and most static decisions are of watched features, which are
+  // retired, so waiting costs the map little; with translation it would hold back features SLAM needs.
   const int memoryFrames = m_opts.motion_memory_frames;
   const std::vector<std::pair<std::int64_t, Vec2>> seenNow = recentMotion();
   const bool holdNearMotion = m_motion.pNotTranslating >= 0.5;
