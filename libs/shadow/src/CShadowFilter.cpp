@@ -233,21 +233,26 @@ bool nearRecentMotion(const Vec2& uv, const std::vector<std::pair<std::int64_t, 
 }
 }  // namespace
 
-std::vector<std::pair<std::int64_t, Vec2>> CShadowFilter::recentMotion()
+void CShadowFilter::recordMotion()
 {
-  // The sightings are kept as rays in W and placed through the current camera's rotation (the infinite
-  // homography): a camera that pans carries the place where motion was seen across the image.
+  // The sightings are kept as rays in W: placed later through the then current camera's rotation (the
+  // infinite homography), a camera that pans carries the place where motion was seen across the image.
   const int memoryFrames = m_opts.motion_memory_frames;
   const Mat3 R_W_C = math::quatToRotation(m_motion.q_W_C);
   for (const auto& f : m_features)
     if (memoryFrames > 0 && f.cls == EShadowClass::Dynamic && f.measured)
       m_dynamicSeen.push_back({m_motion.frame, f.id, R_W_C * m_cam->unproject(f.uv).unitVector()});
   while (!m_dynamicSeen.empty() && m_dynamicSeen.front().frame <= m_motion.frame - memoryFrames) m_dynamicSeen.pop_front();
+}
+
+std::vector<std::pair<std::int64_t, Vec2>> CShadowFilter::motionInView() const
+{
+  const Mat3 R_C_W = math::quatToRotation(m_motion.q_W_C).transpose();
   std::vector<std::pair<std::int64_t, Vec2>> seen;
   for (const auto& d : m_dynamicSeen)
   {
     Vec2 uv;
-    if (m_cam->project(R_W_C.transpose() * d.ray_W, uv)) seen.emplace_back(d.id, uv);
+    if (m_cam->project(R_C_W * d.ray_W, uv)) seen.emplace_back(d.id, uv);
   }
   return seen;
 }
@@ -267,8 +272,10 @@ void CShadowFilter::classifyAndManage()
   // the decision is the depth-free test's and most static decisions are of watched features, which are
   // retired, so waiting costs the map little; with translation it would hold back features SLAM needs.
   const int memoryFrames = m_opts.motion_memory_frames;
-  const std::vector<std::pair<std::int64_t, Vec2>> seenNow = recentMotion();
+  recordMotion();
   const bool holdNearMotion = m_motion.pNotTranslating >= 0.5;
+  const std::vector<std::pair<std::int64_t, Vec2>> seenNow =
+      holdNearMotion ? motionInView() : std::vector<std::pair<std::int64_t, Vec2>>{};
   std::vector<TShadowFeature> kept;
   kept.reserve(m_features.size());
   for (auto& f : m_features)

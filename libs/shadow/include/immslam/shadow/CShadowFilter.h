@@ -208,9 +208,10 @@ class CShadowFilter
   void updateFeature(TShadowFeature& f, const Vec2& z);
   void classifyAndManage();
   /** Records this frame's measured dynamic features among the sightings of the last
-   * TOptions::motion_memory_frames and returns every sighting's feature id and pixel in the current
-   * image (through the camera's rotation since). */
-  std::vector<std::pair<std::int64_t, Vec2>> recentMotion();
+   * TOptions::motion_memory_frames (older ones forgotten). */
+  void recordMotion();
+  /** Every sighting's feature id and pixel in the current image (through the camera's rotation since). */
+  std::vector<std::pair<std::int64_t, Vec2>> motionInView() const;
   void endFrame();
   TPromotion makePromotion(const TShadowFeature& f, const TRayTestResult& r) const;
 
