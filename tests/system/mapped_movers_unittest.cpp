@@ -106,8 +106,9 @@ TEST(FirstMapMovers, StillCameraFirstMapIsTestedFromTheFirstFrame)
 {
   // Measured (seed 7, 120 frames, default config): the first map's copies are decided from frame 7
   // on: the first dynamic decision on a box at frame 7 (main before: 18, from a feature handed over
-  // after its rejections), 21 first-map features confirmed static at frame 10, none of the first
-  // map's features on a box static; rotation RMSE 0.011 deg. Limits at about 1.2 x. (A watched feature
+  // after its rejections), 14 first-map features confirmed static by frame 32 (static decisions wait
+  // for a track of 30 frames while the camera does not translate; before, 21 at frame 10),
+  // none of the first map's features on a box static; rotation RMSE 0.011 deg. Limits at about 1.2 x. (A watched feature
   // born at frame 54 on a part of a box that stays put in the image is decided static at frame 63:
   // the watched features' rates are MoversWithoutTranslation's.)
   const auto out = outDir("first_map_still");
@@ -122,12 +123,12 @@ TEST(FirstMapMovers, StillCameraFirstMapIsTestedFromTheFirstFrame)
     if (searches[i].size() >= 2 && std::stod(searches[i][0]) * 30.0 < 1.5) firstMap.insert(std::stoll(searches[i][1]));
   ASSERT_GE(firstMap.size(), 20u);
   double firstDynamic = -1;
-  int staticBy12 = 0, staticOnMovers = 0;
+  int staticBy32 = 0, staticOnMovers = 0;
   for (const auto& d : readDecisions(out + "/classifications.csv"))
   {
     const bool moving = onMover(src, d.t, d.uv);
     if (d.dynamic && moving && firstDynamic < 0) firstDynamic = d.t;
-    if (!d.dynamic && d.t * 30.0 <= 12.5) ++staticBy12;
+    if (!d.dynamic && d.t * 30.0 <= 32.5) ++staticBy32;
     if (!d.dynamic && moving && firstMap.count(d.id)) ++staticOnMovers;
   }
   const auto est = core::readTumTrajectory(out + "/trajectory.txt");
@@ -135,11 +136,11 @@ TEST(FirstMapMovers, StillCameraFirstMapIsTestedFromTheFirstFrame)
   ASSERT_TRUE(gt.has_value());
   const double rot = eval::computeAte(est, *gt, eval::EAlignment::None).rotationRmseDeg;
   std::printf("still camera, movers in the first map (%zu features): first dynamic decision on a mover at frame %.0f; "
-              "%d static decisions by frame 12; %d of the first map static on movers; rotation RMSE %.4f deg\n",
-              firstMap.size(), firstDynamic * 30.0, staticBy12, staticOnMovers, rot);
+              "%d static decisions by frame 32; %d of the first map static on movers; rotation RMSE %.4f deg\n",
+              firstMap.size(), firstDynamic * 30.0, staticBy32, staticOnMovers, rot);
   EXPECT_GE(firstDynamic, 0.0);
   EXPECT_LE(firstDynamic * 30.0, 9.0);
-  EXPECT_GE(staticBy12, 17);
+  EXPECT_GE(staticBy32, 11);
   EXPECT_EQ(staticOnMovers, 0);
   EXPECT_LT(rot, 0.014);
 }

@@ -197,9 +197,12 @@ TEST(ShadowSystem, MovingObjectsOverFiveSeeds)
     std::printf("seed %d: full system ATE %.3f %% of path without moving objects, %.3f %% with; refined %.3f %%, "
                 "%.3f %%\n",
                 seed, 100 * ate[0], 100 * ate[1], 100 * refined[0], 100 * refined[1]);
-    // ~1.2x each seed's measured ATE with moving objects (2026-11-27): seeds 7 / 11 / 23 / 42 / 101:
-    // 0.892 / 1.086 / 1.030 / 0.572 / 0.920 % (without them 0.872 / 0.839 / 0.534 / 0.417 / 0.720 %).
-    static const std::map<int, double> limit{{7, 0.0107}, {11, 0.0131}, {23, 0.0124}, {42, 0.0069}, {101, 0.0111}};
+    // ~1.2x each seed's measured ATE with moving objects: seeds 7 / 11 / 23 / 42 / 101: 0.728 / 1.099 /
+    // 1.496 / 0.583 / 0.647 % (without them 0.873 / 0.604 / 0.494 / 0.432 / 0.734 %); before static
+    // decisions waited for a track of 30 frames while the camera does not translate 0.892 / 1.086 /
+    // 1.030 / 0.572 / 0.920 % (mean 0.900 against 0.911 now; without them 0.872 / 0.839 / 0.534 / 0.417
+    // / 0.720 %).
+    static const std::map<int, double> limit{{7, 0.0088}, {11, 0.0132}, {23, 0.0180}, {42, 0.0070}, {101, 0.0111}};
     EXPECT_LE(ate[1], limit.at(seed)) << "seed " << seed;
     EXPECT_LT(refined[1], ate[1]) << "seed " << seed;
     sumStill += ate[0];
@@ -553,12 +556,13 @@ TEST(ShadowSystem, RealVideoOfPeopleWalkingSeenByARotatingCamera)
   EXPECT_LT(full.rotationRmseDeg, single.rotationRmseDeg);
   EXPECT_GT(full.segmentation, 0.99);
   // The watched features (the default) let the shadow filter see the people while the map is
-  // complete: 22 decisions on people (20 dynamic), 3 of 98 on the courtyard dynamic, against MOG2
-  // masks (27, 26 and 2 of 111 before static decisions waited where motion was seen lately: fewer
-  // decisions, as features where people walked wait; over the whole video 85 decisions on people,
-  // 11.8 % static, against 99 and 13.1 %, doc/shadow.md). Without them 27 decisions, all but one on
-  // the first map's probation copies. Limits ~1.2x.
-  EXPECT_GE(full.decisions.trulyDynamic(), 18u);
+  // complete: 15 decisions on people (all dynamic), 1 of 54 on the courtyard dynamic, against MOG2
+  // masks (22, 20 dynamic, and 3 of 98 before the static decisions of new features waited for a track
+  // of 30 frames while the camera does not translate: fewer decisions, as a watched feature holds its
+  // slot longer; over the whole video 54 decisions on people, 1 static, against 85 and 11.8 %,
+  // doc/shadow.md). Without them 26 decisions, all but one on the first map's probation copies.
+  // Limits ~1.2x.
+  EXPECT_GE(full.decisions.trulyDynamic(), 12u);
   EXPECT_LE(full.decisions.movingAsStaticRate(), 0.095);
   EXPECT_LE(full.decisions.staticAsDynamicRate(), 0.041);
   EXPECT_LE(notWatching.decisions.dynamicAsStatic, 0u) << "nothing moving enters the map";
@@ -624,11 +628,17 @@ TEST(ShadowSystem, RealHandPastedIntoARealHandHeldVideo)
   // hand and the box static, static->dynamic 66 of 525 (the probation copies add decisions). With
   // watched features (the default since): mean 0.076 % (IMM without shadow filter 0.983 %, single
   // model 0.650 %), 2 of 155 on the hand and the box static (the masks also mark the box while the
-  // hand holds it still), static->dynamic 52 of 540. Limits ~1.2x.
+  // hand holds it still), static->dynamic 52 of 540. With static decisions waiting for a track of 30
+  // frames while the camera does not translate: 0.805 / 0.060 / 0.149 % (mean 0.338 %; IMM without
+  // shadow filter 0.967 %, single model 0.641 %), 0 of 144 on the hand and the box static,
+  // static->dynamic 95 of 566. Variant 0 deviates on every RANSAC seed tried (0.80 / 0.30 / 0.38 % for
+  // --set slam.seed=1..3, against 0.10 / 0.10 / 0.09 % before): its first map's probation copies are
+  // confirmed at the camera's first translation instead of at frame 10, and the run takes another
+  // course (experiments/shadow-filter.md). Limits ~1.2x.
   EXPECT_LE(mean(deviation["imm7-shadow"]), 0.5 * mean(deviation["imm7"]));
   EXPECT_LE(mean(deviation["imm7-shadow"]), mean(deviation["single"]));
-  EXPECT_LT(mean(deviation["imm7-shadow"]), 0.0015);
+  EXPECT_LT(mean(deviation["imm7-shadow"]), 0.0041);
   EXPECT_GE(pooled.trulyDynamic(), 55u);
   EXPECT_LE(pooled.movingAsStaticRate(), 0.0155);
-  EXPECT_LE(pooled.staticAsDynamicRate(), 0.151);
+  EXPECT_LE(pooled.staticAsDynamicRate(), 0.202);
 }

@@ -69,12 +69,16 @@ TEST(MoversWithoutTranslation, CameraAtRestDecidesAndKeepsStill)
   // moving->static 13/505 against 23/527 and static->dynamic 46/1226 against 46/1264 (the fewer
   // decisions: features waiting near a box hold watched slots). With the memory of where motion was
   // seen (nearRecentMotion): this seed 142 decisions, 1/27, 7/115 before; seeds 1-10 moving->static
-  // 9/466 against 13/505, static->dynamic 41/1029 against 46/1226. Limits at about 1.2 x.
+  // 9/466 against 13/505, static->dynamic 41/1029 against 46/1226. Static decisions of new features
+  // now wait for a track of 30 frames while the camera does not translate (doc/shadow.md, "Decision
+  // rules"; this replaced the memory): this seed 84 decisions, moving->static 0/21, static->dynamic
+  // 4/63 (fewer decisions: a watched feature holds its slot for 30 frames); seeds 1-10 moving->static
+  // 0/339, static->dynamic 38/559. Limits at about 1.2 x.
   const TMoversRun r = runMovers("still-movers.ini", "movers_still");
-  EXPECT_GE(r.decisions.trulyDynamic(), 22u) << "the boxes must be seen and decided";
-  EXPECT_GE(r.decisions.trulyStatic(), 96u);
+  EXPECT_GE(r.decisions.trulyDynamic(), 17u) << "the boxes must be seen and decided";
+  EXPECT_GE(r.decisions.trulyStatic(), 52u);
   EXPECT_LE(r.decisions.movingAsStaticRate(), 0.062);
-  EXPECT_LE(r.decisions.staticAsDynamicRate(), 0.073);
+  EXPECT_LE(r.decisions.staticAsDynamicRate(), 0.076);
   EXPECT_LT(r.rotationRmseDeg, 0.013);
   EXPECT_LT(r.maxTranslation, 1e-3);
 }
@@ -86,10 +90,12 @@ TEST(MoversWithoutTranslation, RotatingCameraDecidesAndFollowsTheRoom)
   // features: 149 decisions, 5/33, 4/116; over seeds 1-10, moving->static 17/365 against 18/371,
   // static->dynamic 47/1300 against 56/1298; before they waited where motion was seen lately: 161,
   // 4/25, 6/136; seeds 1-10 moving->static 14/348 against 17/365, static->dynamic 50/1166 against
-  // 47/1300). Limits at about 1.2 x.
+  // 47/1300; before static decisions of new features waited for a track of 30 frames while the
+  // camera does not translate: 142 decisions, 3/27, 3/129 before; now 79, 1/18, 1/61, seeds 1-10
+  // moving->static 0/239 against 14/348, static->dynamic 24/503 against 50/1166). Limits at about 1.2 x.
   const TMoversRun r = runMovers("rotating-movers.ini", "movers_rotating");
-  EXPECT_GE(r.decisions.trulyDynamic(), 21u) << "the boxes must be seen and decided";
-  EXPECT_GE(r.decisions.trulyStatic(), 96u);
+  EXPECT_GE(r.decisions.trulyDynamic(), 15u) << "the boxes must be seen and decided";
+  EXPECT_GE(r.decisions.trulyStatic(), 50u);
   EXPECT_LE(r.decisions.movingAsStaticRate(), 0.182);
   EXPECT_LE(r.decisions.staticAsDynamicRate(), 0.053);
   EXPECT_LT(r.rotationRmseDeg, 0.027);

@@ -387,7 +387,8 @@ EShadowClass CRayClassifier::classify(TRayTrack& track, TDecision* info, TRayTes
     if (info) info->testT = r.evaluated ? r.test.test.T : d.T;
     if (nRej >= m_p.dynamicRejections)
       out = EShadowClass::Dynamic;
-    else if (!rejected && track.acceptStreak >= m_p.staticAcceptances && track.elapsed >= m_p.staticMinFrames)
+    else if (!rejected && track.acceptStreak >= m_p.staticAcceptances && track.elapsed >= m_p.staticMinFrames &&
+             track.elapsed >= track.staticNotBefore)
     {
       const double pRays = r.evaluated ? detectionProbability(track, r, m_p.staticMinVelocityPx) : 0.0;
       const double pDepthFree = track.notTranslating * depthFreeDetectionProbability(

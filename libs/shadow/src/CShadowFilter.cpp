@@ -212,50 +212,7 @@ bool amongDynamic(const Vec2& uv, const std::vector<Vec2>& dynamicUv, double rad
   return false;
 }
 
-/** Whether at least 2 distinct dynamic features were measured within `radius` px of `uv` in the last
- * TOptions::motion_memory_frames (`seen`: feature id and where that measurement's ray falls in the
- * current image): the same-frame rule of amongDynamic with a memory. An object whose dynamic features
- * were lost (patches that stop matching as it turns, tracks dropped while it halts) leaves its new
- * features no dynamic neighbour in the frame they are decided in, and those born while it halts are
- * still. */
-bool nearRecentMotion(const Vec2& uv, const std::vector<std::pair<std::int64_t, Vec2>>& seen, double radius)
-{
-  std::int64_t first = -1;
-  for (const auto& [id, at] : seen)
-  {
-    if ((at - uv).squaredNorm() >= radius * radius) continue;
-    if (first < 0)
-      first = id;
-    else if (id != first)
-      return true;
-  }
-  return false;
-}
 }  // namespace
-
-void CShadowFilter::recordMotion()
-{
-  // The sightings are kept as rays in W: placed later through the then current camera's rotation (the
-  // infinite homography), a camera that pans carries the place where motion was seen across the image.
-  const int memoryFrames = m_opts.motion_memory_frames;
-  const Mat3 R_W_C = math::quatToRotation(m_motion.q_W_C);
-  for (const auto& f : m_features)
-    if (memoryFrames > 0 && f.cls == EShadowClass::Dynamic && f.measured)
-      m_dynamicSeen.push_back({m_motion.frame, f.id, R_W_C * m_cam->unproject(f.uv).unitVector()});
-  while (!m_dynamicSeen.empty() && m_dynamicSeen.front().frame <= m_motion.frame - memoryFrames) m_dynamicSeen.pop_front();
-}
-
-std::vector<std::pair<std::int64_t, Vec2>> CShadowFilter::motionInView() const
-{
-  const Mat3 R_C_W = math::quatToRotation(m_motion.q_W_C).transpose();
-  std::vector<std::pair<std::int64_t, Vec2>> seen;
-  for (const auto& d : m_dynamicSeen)
-  {
-    Vec2 uv;
-    if (m_cam->project(R_C_W * d.ray_W, uv)) seen.emplace_back(d.id, uv);
-  }
-  return seen;
-}
 
 void CShadowFilter::classifyAndManage()
 {
@@ -266,16 +223,13 @@ void CShadowFilter::classifyAndManage()
   std::vector<Vec2> dynamicUv;
   for (const auto& f : m_features)
     if (f.cls == EShadowClass::Dynamic && f.measured) dynamicUv.push_back(f.uv);
-  // Where motion was seen lately: while the camera does not translate (the bank's stationary and
-  // rotation families), a static decision there waits until the feature's track is as long as that
-  // memory, so that a mover seen still for a while (a turning point, a pause) moves again first. Then
-  // the decision is the depth-free test's and most static decisions are of watched features, which are
-  // retired, so waiting costs the map little; with translation it would hold back features SLAM needs.
-  const int memoryFrames = m_opts.motion_memory_frames;
-  recordMotion();
-  const bool holdNearMotion = m_motion.pNotTranslating >= 0.5;
-  const std::vector<std::pair<std::int64_t, Vec2>> seenNow =
-      holdNearMotion ? motionInView() : std::vector<std::pair<std::int64_t, Vec2>>{};
+  // While the camera does not translate (the bank's stationary and rotation families), a static
+  // decision waits until the track is still_camera_static_frames long: the depth-free test then has
+  // power against slow image motion too (a mover at a turning point or pausing, one moving along its
+  // line of sight, whose features were born while it looked still). Waiting costs the map little: SLAM
+  // takes the unresolved features it needs and a watched feature decided static is only retired; with
+  // translation it would hold back the features SLAM needs.
+  const bool notTranslating = m_motion.pNotTranslating >= 0.5;
   std::vector<TShadowFeature> kept;
   kept.reserve(m_features.size());
   for (auto& f : m_features)
@@ -286,11 +240,9 @@ void CShadowFilter::classifyAndManage()
     {
       TDecision info;
       TRayTestResult r;
+      f.track.staticNotBefore = notTranslating ? m_opts.still_camera_static_frames : 0;
       EShadowClass c = m_classifier.classify(f.track, &info, &r, m_map.empty() ? nullptr : &m_map);
       if (c == EShadowClass::Static && amongDynamic(f.uv, dynamicUv, amongRadius)) c = EShadowClass::Pending;
-      if (c == EShadowClass::Static && holdNearMotion && f.track.elapsed < memoryFrames &&
-          nearRecentMotion(f.uv, seenNow, amongRadius))
-        c = EShadowClass::Pending;
       if (c != EShadowClass::Pending)
       {
         info.id = f.id;

@@ -37,6 +37,9 @@ struct TRayTrack
   int evaluations = 0;          ///< valid tests so far
   int rejections = 0;           ///< rejected tests so far
   double detectionProbability = 0;  ///< last power figure computed (detectionProbability())
+  /** No static decision before the track is this long (frames), whatever staticMinFrames says: set
+   * by the caller for its own waits (CShadowFilter: a camera that does not translate). */
+  double staticNotBefore = 0;
   /** The smallest probability, over the frames since the first view, that the camera did not
    * translate (TCameraMotion::pNotTranslating). */
   double notTranslating = 1;

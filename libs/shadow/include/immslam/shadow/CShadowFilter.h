@@ -26,7 +26,6 @@
 
 #include <chrono>
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <unordered_set>
 #include <utility>
@@ -100,13 +99,13 @@ class CShadowFilter
     double static_min_velocity_px = kStaticMinVelocityPx; ///< ... and power against this speed (px/frame at the point's distance)
     double static_power = kStaticPower;  ///< ... with this detection probability
     bool static_power_worst_case = true; ///< ... in every direction (else on average over directions)
-    /** While the camera does not translate (TCameraMotion::pNotTranslating >= 0.5), where two or more
-     * dynamic features were measured within a cell of an 8 x 6 grid of the image in the last this-many
-     * frames, a static decision waits until the feature's track is this long (a mover at a turning
-     * point or pausing, whose dynamic features were seen there lately; doc/shadow.md, "Decision
-     * rules"). 0: only the dynamic features measured in the same frame hold it back. */
-    static constexpr int kMotionMemoryFrames = 30;
-    int motion_memory_frames = kMotionMemoryFrames;
+    /** While the camera does not translate (TCameraMotion::pNotTranslating >= 0.5), a static decision
+     * waits until the feature's track is this long, so that slow image motion has had the time to
+     * show in the depth-free test (a mover at a turning point or pausing, one moving along its line
+     * of sight); waiting costs the map little there (SLAM takes the unresolved features it needs;
+     * doc/shadow.md, "Decision rules"). At most static_min_frames: no wait. */
+    static constexpr int kStillCameraStaticFrames = 30;
+    int still_camera_static_frames = kStillCameraStaticFrames;
     // -- Management
     static constexpr int kMaxPendingFrames = 150;       ///< undecided features dropped after 150 frames
     static constexpr int kMaxMissedFrames = 5;          ///< pending features dropped after 5 misses in a row
@@ -207,11 +206,6 @@ class CShadowFilter
   void predictAll(const TCameraMotion& motion);
   void updateFeature(TShadowFeature& f, const Vec2& z);
   void classifyAndManage();
-  /** Records this frame's measured dynamic features among the sightings of the last
-   * TOptions::motion_memory_frames (older ones forgotten). */
-  void recordMotion();
-  /** Every sighting's feature id and pixel in the current image (through the camera's rotation since). */
-  std::vector<std::pair<std::int64_t, Vec2>> motionInView() const;
   void endFrame();
   TPromotion makePromotion(const TShadowFeature& f, const TRayTestResult& r) const;
 
@@ -225,15 +219,6 @@ class CShadowFilter
   bool m_started = false;
   TShadowReport m_report;
   CMapViews m_map;  ///< the SLAM map's recent measurements (observeMap)
-  /** The dynamic features measured in the last TOptions::motion_memory_frames frames (frame, id, the
-   * measured ray in W), oldest first: where motion was seen lately (classifyAndManage). */
-  struct TDynamicSighting
-  {
-    std::int64_t frame;
-    std::int64_t id;
-    Vec3 ray_W;
-  };
-  std::deque<TDynamicSighting> m_dynamicSeen;
   double m_sigmaV = 0, m_sigmaA = 0;  ///< in length units per frame (per frame^2)
   std::chrono::steady_clock::time_point m_t0;  ///< start of the current frame
 };
