@@ -354,7 +354,7 @@ double CRayClassifier::mapScale(const TRayTrack& track, const TRayTestResult& r,
 }
 
 EShadowClass CRayClassifier::classify(TRayTrack& track, TDecision* info, TRayTestResult* result,
-                                      const CMapViews* map) const
+                                      const CMapViews* map, double staticNotBefore) const
 {
   if (track.views.size() < 3 || track.views.back().frame != track.frame ||
       track.elapsed < m_p.minTestFrames)
@@ -388,7 +388,7 @@ EShadowClass CRayClassifier::classify(TRayTrack& track, TDecision* info, TRayTes
     if (nRej >= m_p.dynamicRejections)
       out = EShadowClass::Dynamic;
     else if (!rejected && track.acceptStreak >= m_p.staticAcceptances && track.elapsed >= m_p.staticMinFrames &&
-             track.elapsed >= track.staticNotBefore)
+             track.elapsed >= staticNotBefore)
     {
       const double pRays = r.evaluated ? detectionProbability(track, r, m_p.staticMinVelocityPx) : 0.0;
       const double pDepthFree = track.notTranslating * depthFreeDetectionProbability(

@@ -240,8 +240,9 @@ void CShadowFilter::classifyAndManage()
     {
       TDecision info;
       TRayTestResult r;
-      f.track.staticNotBefore = notTranslating ? m_opts.still_camera_static_frames : 0;
-      EShadowClass c = m_classifier.classify(f.track, &info, &r, m_map.empty() ? nullptr : &m_map);
+      const double staticNotBefore = notTranslating ? m_opts.still_camera_static_frames : 0;
+      EShadowClass c =
+          m_classifier.classify(f.track, &info, &r, m_map.empty() ? nullptr : &m_map, staticNotBefore);
       if (c == EShadowClass::Static && amongDynamic(f.uv, dynamicUv, amongRadius)) c = EShadowClass::Pending;
       if (c != EShadowClass::Pending)
       {

@@ -37,9 +37,6 @@ struct TRayTrack
   int evaluations = 0;          ///< valid tests so far
   int rejections = 0;           ///< rejected tests so far
   double detectionProbability = 0;  ///< last power figure computed (detectionProbability())
-  /** No static decision before the track is this long (frames), whatever staticMinFrames says: set
-   * by the caller for its own waits (CShadowFilter: a camera that does not translate). */
-  double staticNotBefore = 0;
   /** The smallest probability, over the frames since the first view, that the camera did not
    * translate (TCameraMotion::pNotTranslating). */
   double notTranslating = 1;
@@ -194,9 +191,11 @@ class CRayClassifier
    * counters and decides: Static, Dynamic or Pending.
    * \param info optional output: the decision's figures (testT, minDetectableVelocityPx).
    * \param map optional: the SLAM map's recent measurements; a three-ray rejection then needs
-   * T > mapScale() x threshold (see the class comment). Null: the test alone, as in the paper. */
+   * T > mapScale() x threshold (see the class comment). Null: the test alone, as in the paper.
+   * \param staticNotBefore no static decision before the track is this long (frames), whatever
+   * staticMinFrames says: the caller's own wait (CShadowFilter: a camera that does not translate). */
   EShadowClass classify(TRayTrack& track, TDecision* info = nullptr, TRayTestResult* result = nullptr,
-                        const CMapViews* map = nullptr) const;
+                        const CMapViews* map = nullptr, double staticNotBefore = 0) const;
 
   /** The map's scale of the three-ray statistic over the views of r: the median statistic of the
    * map's features measured in the same three frames, tested with the same relative poses, over the
