@@ -521,8 +521,9 @@ TEST(RobustConditions, MostMatchesOnAMovingObject)
     // decisions waiting for a track of 30 frames while the camera does not translate, the slab stays
     // out of its map (1 frame with most matches on it), the map is lost while the slab covers the view
     // (frames 77-81) and the pose steps there (0.94 before; the rendered run's ATE 7.25 % of path
-    // against 10.42 % before).
-    expectContinuous(run, kFrames, perConfig(cfg, 0.64, 0.47, 2.74));
+    // against 10.42 % before). With dynamic decisions needing a track that follows one point
+    // (min_point_ncc) the step there is 3.25 and the run's ATE 6.80 % of path.
+    expectContinuous(run, kFrames, perConfig(cfg, 0.64, 0.47, 3.9));
     EXPECT_LT(f.ateAll, perConfig(cfg, 0.206, 0.199, 0.182));
   }
 }

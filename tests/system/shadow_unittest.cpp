@@ -528,15 +528,17 @@ TEST(ShadowSystem, RealVideoOfAHandMovingABoxInFrontOfAStillCamera)
   // what the test should give; without watched features 1.93 deg, 107 / 29 decisions, moving->static
   // 16 of 116. IMM without shadow filter 0.28 deg, 27.3 %; single model
   // 34.9 deg (the IMM without shadow filter explains the box with general motion and a map at
-  // infinity). Limits ~1.2x.
+  // infinity). A dynamic decision then came to need a track that follows one point (min_point_ncc):
+  // 184 decisions on what moves (170 dynamic, moving->static 14 of 184), 7 of 25 on the background
+  // dynamic (13 of 30 before), 2.00 deg; without watched features 95 (13 static), 1.88 deg. Limits ~1.2x.
   EXPECT_LT(full.rotationRmseDeg, 2.53);
   EXPECT_GT(single.rotationRmseDeg, 10.0) << "the single model follows the box: the test must see that failure";
   EXPECT_GT(full.segmentation, 0.768);
   EXPECT_GT(full.segmentation, noShadow.segmentation + 0.3);
-  EXPECT_GE(full.decisions.trulyDynamic(), 210u);
+  EXPECT_GE(full.decisions.trulyDynamic(), 153u);
   EXPECT_LE(full.decisions.movingAsStaticRate(), 0.108);
   EXPECT_LT(notWatching.rotationRmseDeg, 2.31);
-  EXPECT_GE(notWatching.decisions.trulyDynamic(), 97u);
+  EXPECT_GE(notWatching.decisions.trulyDynamic(), 79u);
   EXPECT_LE(notWatching.decisions.movingAsStaticRate(), 0.17);
 }
 
@@ -561,8 +563,9 @@ TEST(ShadowSystem, RealVideoOfPeopleWalkingSeenByARotatingCamera)
   // of 30 frames while the camera does not translate: fewer decisions, as a watched feature holds its
   // slot longer; over the whole video 54 decisions on people, 1 static, against 85 and 11.8 %,
   // doc/shadow.md). Without them 26 decisions, all but one on the first map's probation copies.
-  // Limits ~1.2x.
-  EXPECT_GE(full.decisions.trulyDynamic(), 12u);
+  // Since a dynamic decision needs a track that follows one point (min_point_ncc; a walking person's
+  // patches deform): 9 decisions on people, all dynamic, 1 of 54 on the courtyard. Limits ~1.2x.
+  EXPECT_GE(full.decisions.trulyDynamic(), 7u);
   EXPECT_LE(full.decisions.movingAsStaticRate(), 0.095);
   EXPECT_LE(full.decisions.staticAsDynamicRate(), 0.041);
   EXPECT_LE(notWatching.decisions.dynamicAsStatic, 0u) << "nothing moving enters the map";

@@ -68,7 +68,7 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
   mu.maxCoeff(&best);
   int nPending = 0, nDynamic = 0;
   if (fr.shadow)
-    for (const auto& v : fr.shadow->views) (v.cls == shadow::EShadowClass::Dynamic ? nDynamic : nPending)++;
+    for (const auto& v : fr.shadow->views) (v.cls == shadow::EShadowClass::Dynamic && !v.incoherent ? nDynamic : nPending)++;
   m_stats->addCells({r.timestamp, r.nMap, r.nPredicted, r.nMatched, r.nRejected, r.meanSearchAreaPx2, r.nDepthKnown,
                      fr.totalMs, r.frame, r.dtFrames, r.nFound, r.nLowInnovation, r.nRescued, r.nHypotheses, r.nAdded,
                      r.nDeleted, r.nConverted, r.timeMs, r.tPredictMs, r.tSearchMs, r.tRansacMs, r.tUpdateMs, r.tMapMs,

@@ -46,7 +46,8 @@ cv::Mat drawFrameOverlay(const TFrameResult& res)
   if (shadowReport)
     for (const auto& v : shadowReport->views)
       oc.features.push_back(viz::TFeatureView{
-          v.uv, v.cls == shadow::EShadowClass::Dynamic ? viz::EFeatureClass::Dynamic : viz::EFeatureClass::Pending,
+          v.uv,
+          v.cls == shadow::EShadowClass::Dynamic && !v.incoherent ? viz::EFeatureClass::Dynamic : viz::EFeatureClass::Pending,
           v.id});
   char buf[160];
   std::snprintf(buf, sizeof buf, "frame %lld  t %.3f s  map %d  matched %d", static_cast<long long>(r.frame),

@@ -198,6 +198,15 @@ std::vector<TPromotion> CShadowFilter::releaseUnresolved(int maxCount, int minMe
 
 namespace
 {
+/** Median of the match scores (0 when there is none). */
+double medianScore(std::vector<float> scores)
+{
+  if (scores.empty()) return 0;
+  const auto mid = scores.begin() + static_cast<std::ptrdiff_t>(scores.size() / 2);
+  std::nth_element(scores.begin(), mid, scores.end());
+  return *mid;
+}
+
 /** Whether at least 2 of the dynamic features measured in this frame (`dynamicUv`) lie within `radius`
  * px of pixel `uv` (one dynamic neighbour may be a false decision). A static decision there waits
  * (classifyAndManage): a point that does not move among points of an object seen moving is more likely
@@ -213,6 +222,22 @@ bool amongDynamic(const Vec2& uv, const std::vector<Vec2>& dynamicUv, double rad
 }
 
 }  // namespace
+
+bool CShadowFilter::followsOnePoint(const TShadowFeature& f) const
+{
+  return f.scores.empty() || medianScore(f.scores) >= m_opts.min_point_ncc;
+}
+
+void CShadowFilter::recordDecision(const TShadowFeature& f, EShadowClass c, TDecision info)
+{
+  info.id = f.id;
+  info.cls = c;
+  info.uv = f.uv;
+  info.timestamp = m_motion.timestamp;
+  info.frame = m_motion.frame;
+  info.ageFrames = static_cast<int>(std::lround(f.track.elapsed));
+  m_report.decisions.push_back(info);
+}
 
 void CShadowFilter::classifyAndManage()
 {
@@ -244,28 +269,21 @@ void CShadowFilter::classifyAndManage()
       EShadowClass c =
           m_classifier.classify(f.track, &info, &r, m_map.empty() ? nullptr : &m_map, staticNotBefore);
       if (c == EShadowClass::Static && amongDynamic(f.uv, dynamicUv, amongRadius)) c = EShadowClass::Pending;
-      if (c != EShadowClass::Pending)
+      if (c == EShadowClass::Dynamic)
       {
-        info.id = f.id;
-        info.cls = c;
-        info.uv = f.uv;
-        info.timestamp = m_motion.timestamp;
-        info.frame = m_motion.frame;
-        info.ageFrames = static_cast<int>(std::lround(f.track.elapsed));
-        m_report.decisions.push_back(info);
+        f.cls = EShadowClass::Dynamic;
+        // Motion seen, but the template follows no point (min_point_ncc): held with no decision.
+        f.incoherent = !followsOnePoint(f);
+        f.track.views.clear();
+        f.track.views.shrink_to_fit();
+        ++(f.incoherent ? m_report.nIncoherent : m_report.nNewDynamic);
       }
+      if (c != EShadowClass::Pending && !f.incoherent) recordDecision(f, c, info);
       if (c == EShadowClass::Static)
       {
         m_report.promotions.push_back(makePromotion(f, r));
         ++m_report.nPromoted;
         continue;  // leaves the shadow filter
-      }
-      if (c == EShadowClass::Dynamic)
-      {
-        f.cls = EShadowClass::Dynamic;
-        f.track.views.clear();
-        f.track.views.shrink_to_fit();
-        ++m_report.nNewDynamic;
       }
     }
     if (f.cls == EShadowClass::Pending)
@@ -325,8 +343,11 @@ void CShadowFilter::endFrame()
     v.S = f.S;
     v.searched = f.searched;
     v.measured = f.measured;
+    v.incoherent = f.incoherent;
     v.ageFrames = static_cast<int>(std::lround(f.track.elapsed));
     m_report.views.push_back(v);
+    if (f.incoherent)
+      continue;
     if (f.cls == EShadowClass::Dynamic)
     {
       m_report.tracks.push_back(trackPoint(f));
@@ -357,7 +378,11 @@ void CShadowFilter::update(const std::vector<TShadowMatch>& matches)
     if (f.measured) continue;  // one measurement per feature and frame
     f.searched = true;
     ++m_report.nSearched;
-    if (m.found && m.uv.allFinite()) updateFeature(f, m.uv);
+    if (m.found && m.uv.allFinite())
+    {
+      updateFeature(f, m.uv);
+      if (f.cls == EShadowClass::Pending) f.scores.push_back(static_cast<float>(m.score));
+    }
   }
   m_report.tUpdateMs += msSince(t0);
 }

@@ -39,6 +39,7 @@ void CShadowFilter::TOptions::validate(const std::string& s) const
   core::requirePositive(static_min_velocity_px, s, "static_min_velocity_px");
   core::requireInRange(static_power, 0.5, 0.999999, s, "static_power");
   core::requireInRange(still_camera_static_frames, 0, 1000000, s, "still_camera_static_frames");
+  core::requireInRange(min_point_ncc, 0.0, 1.0, s, "min_point_ncc");
   core::requireInRange(max_pending_frames, 3, 1000000, s, "max_pending_frames");
   core::requireInRange(max_missed_frames, 0, 1000000, s, "max_missed_frames");
   core::requireInRange(dynamic_max_missed_frames, 0, 1000000, s, "dynamic_max_missed_frames");

@@ -78,7 +78,7 @@ std::vector<TShadowMatch> CShadowTracker::searchAll(const cv::Mat& grey, const c
     }
     patch->predictTemplate(A, m_templ);
     const frontend::TSearchResult res = frontend::searchInEllipse(grey, m_templ, f.predicted, f.S, m_search, m_ws);
-    matches.push_back({f.id, res.found && !frontend::maskedAt(excluded, res.uv), res.uv});
+    matches.push_back({f.id, res.found && !frontend::maskedAt(excluded, res.uv), res.uv, res.score});
   }
   return matches;
 }

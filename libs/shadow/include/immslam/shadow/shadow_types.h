@@ -116,6 +116,9 @@ struct TFeatureView
   Mat2 S = Mat2::Identity();    ///< innovation covariance of the search
   bool searched = false;        ///< predicted inside the image and searched
   bool measured = false;        ///< matched (and used in the update)
+  /** cls Dynamic without a decision: seen moving, its template following no point
+   * (CShadowFilter::TOptions::min_point_ncc); shown and counted as undecided. */
+  bool incoherent = false;
   int ageFrames = 0;
 };
 
@@ -134,6 +137,7 @@ struct TShadowReport
   int nTimedOut = 0;                   ///< pending features dropped undecided (max age)
   int nLost = 0;                       ///< pending features dropped after too many misses
   int nDynamicDropped = 0;             ///< dynamic features dropped after too many misses
+  int nIncoherent = 0;                 ///< features found moving in this frame whose template follows no point (held, no decision)
   double timeMs = 0;                   ///< wall time of the frame
   double tPredictMs = 0, tSearchMs = 0, tUpdateMs = 0, tClassifyMs = 0;
 };
