@@ -276,6 +276,8 @@ void CShadowFilter::classifyAndManage()
         f.incoherent = !followsOnePoint(f);
         f.track.views.clear();
         f.track.views.shrink_to_fit();
+        f.scores.clear();
+        f.scores.shrink_to_fit();
         ++(f.incoherent ? m_report.nIncoherent : m_report.nNewDynamic);
       }
       if (c != EShadowClass::Pending && !f.incoherent) recordDecision(f, c, info);
@@ -346,9 +348,7 @@ void CShadowFilter::endFrame()
     v.incoherent = f.incoherent;
     v.ageFrames = static_cast<int>(std::lround(f.track.elapsed));
     m_report.views.push_back(v);
-    if (f.incoherent)
-      continue;
-    if (f.cls == EShadowClass::Dynamic)
+    if (f.cls == EShadowClass::Dynamic && !f.incoherent)
     {
       m_report.tracks.push_back(trackPoint(f));
       ++m_report.nDynamic;

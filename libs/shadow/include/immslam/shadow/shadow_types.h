@@ -131,7 +131,7 @@ struct TShadowReport
   std::vector<TPromotion> promotions;  ///< static features to move into SLAM now
   std::vector<TTrackPoint> tracks;     ///< every dynamic feature still tracked
   std::vector<TFeatureView> views;     ///< every shadow feature (after this frame's removals)
-  int nPending = 0, nDynamic = 0;      ///< features held after the frame
+  int nPending = 0, nDynamic = 0;      ///< features held after the frame (undecided ones seen moving, TFeatureView::incoherent, count as pending)
   int nSearched = 0, nMeasured = 0;    ///< searches and matches of this frame
   int nPromoted = 0, nNewDynamic = 0;  ///< decisions of this frame
   int nTimedOut = 0;                   ///< pending features dropped undecided (max age)
