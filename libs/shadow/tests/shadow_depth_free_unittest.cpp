@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <tuple>
 
@@ -116,6 +117,44 @@ TCameraMotion stillCameraMotion()
   m.cov_increment = poseCov(1e-5, 1e-4);
   m.pNotTranslating = 0.999;
   return m;
+}
+
+/** What runStillCamera() saw. */
+struct TStillCameraRun
+{
+  std::vector<std::int64_t> ids;                                  ///< the points' features, in order
+  std::map<std::int64_t, std::pair<EShadowClass, int>> decided;  ///< class and frame of each decision
+  int incoherent = 0;          ///< features held without a decision (TShadowReport::nIncoherent)
+  std::size_t maxTracks = 0;   ///< most dynamic tracks reported in a frame
+  bool viewsConsistent = true; ///< every view is incoherent iff it is dynamic with no decision
+};
+
+/** The filter alone before a still camera for frames 0-45: the points (born at frame 0) measured with
+ * pixel noise at start + k velocity, point i's match with ZNCC score(i). */
+TStillCameraRun runStillCamera(const CShadowFilter::TOptions& o, Rng& rng, const TImagePoints& p,
+                               const std::function<double(std::size_t)>& score)
+{
+  CShadowFilter sf(o, test::simCamera());
+  TCameraMotion m = stillCameraMotion();
+  TStillCameraRun run;
+  for (int k = 0; k <= 45; ++k)
+  {
+    m.frame = k;
+    m.timestamp = k / 30.0;
+    sf.predict(m);
+    std::vector<TShadowMatch> z;
+    for (std::size_t i = 0; i < run.ids.size(); ++i)
+      z.push_back({run.ids[i], true, noisy(rng, p.start[i] + k * p.velocity[i]), score(i)});
+    sf.update(z);
+    const TShadowReport& rep = sf.finishFrame();
+    for (const auto& d : rep.decisions) run.decided[d.id] = {d.cls, static_cast<int>(d.frame)};
+    run.incoherent += rep.nIncoherent;
+    run.maxTracks = std::max(run.maxTracks, rep.tracks.size());
+    for (const auto& v : rep.views)
+      run.viewsConsistent &= v.incoherent == (v.cls == EShadowClass::Dynamic && !run.decided.count(v.id));
+    if (k == 0) run.ids = sf.addFeatures(p.start);
+  }
+  return run;
 }
 
 struct TMonteCarlo
@@ -452,27 +491,13 @@ TEST(DepthFree, SlowMoversAreNotDecidedStaticWhileTheCameraDoesNotTranslate)
   // (still_camera_static_frames = 0) it calls most of them static (measured: 9 of 10); waiting until
   // the tracks are 30 frames long (the default) none is decided static (measured: all 10 dynamic, the
   // last at frame 34).
-  const auto cam = test::simCamera();
   const auto run = [&](int stillFrames) {
     CShadowFilter::TOptions o;
     o.still_camera_static_frames = stillFrames;
-    CShadowFilter sf(o, cam);
     Rng rng(5);
-    const auto [start, velocity] = randomMovingPoints(rng, 10, 0.2);
-    TCameraMotion m = stillCameraMotion();
-    std::vector<std::int64_t> ids;
-    std::map<std::int64_t, std::pair<EShadowClass, int>> decided;
-    for (int k = 0; k <= 45; ++k)
-    {
-      m.frame = k;
-      m.timestamp = k / 30.0;
-      std::vector<std::pair<std::int64_t, Vec2>> z;
-      for (std::size_t i = 0; i < ids.size(); ++i) z.emplace_back(ids[i], noisy(rng, start[i] + k * velocity[i]));
-      for (const auto& d : sf.processMeasurements(m, z).decisions) decided[d.id] = {d.cls, d.frame};
-      if (k == 0) ids = sf.addFeatures(start);
-    }
+    const auto r = runStillCamera(o, rng, randomMovingPoints(rng, 10, 0.2), [](std::size_t) { return 1.0; });
     int nStatic = 0, nDynamic = 0, last = -1;
-    for (const auto& [id, d] : decided)
+    for (const auto& [id, d] : r.decided)
     {
       nStatic += d.first == EShadowClass::Static ? 1 : 0;
       nDynamic += d.first == EShadowClass::Dynamic ? 1 : 0;
@@ -497,43 +522,25 @@ TEST(DepthFree, ATrackWhoseTemplateFollowsNoPointIsNotDecidedDynamic)
   // with it (the default, 0.87) the sliding five are held as motion seen with
   // no decision, reported neither as decisions nor as tracks, and the still points are decided static
   // as before (3 of 5 either way): the check only holds back dynamic decisions.
-  const auto cam = test::simCamera();
   const auto run = [&](double minPointNcc) {
     CShadowFilter::TOptions o;
     o.min_point_ncc = minPointNcc;
-    CShadowFilter sf(o, cam);
     Rng rng(21);
-    auto [start, velocity] = randomMovingPoints(rng, 15, 1.0);
-    for (std::size_t i = 10; i < velocity.size(); ++i) velocity[i] = Vec2::Zero();  // the still points
-    TCameraMotion m = stillCameraMotion();
-    std::vector<std::int64_t> ids;
-    std::map<std::int64_t, EShadowClass> decided;
-    int incoherent = 0;
-    std::size_t maxTracks = 0;
-    for (int k = 0; k <= 45; ++k)
-    {
-      m.frame = k;
-      m.timestamp = k / 30.0;
-      sf.predict(m);
-      std::vector<TShadowMatch> z;
-      for (std::size_t i = 0; i < ids.size(); ++i)
-        z.push_back({ids[i], true, noisy(rng, start[i] + k * velocity[i]), i < 5 ? 0.97 : 0.84});
-      sf.update(z);
-      const TShadowReport& rep = sf.finishFrame();
-      for (const auto& d : rep.decisions) decided[d.id] = d.cls;
-      incoherent += rep.nIncoherent;
-      maxTracks = std::max(maxTracks, rep.tracks.size());
-      for (const auto& v : rep.views) EXPECT_EQ(v.incoherent, v.cls == EShadowClass::Dynamic && !decided.count(v.id));
-      if (k == 0) ids = sf.addFeatures(start);
-    }
+    TImagePoints points = randomMovingPoints(rng, 15, 1.0);
+    for (std::size_t i = 10; i < points.velocity.size(); ++i) points.velocity[i] = Vec2::Zero();  // the still points
+    const auto r = runStillCamera(o, rng, points, [](std::size_t i) { return i < 5 ? 0.97 : 0.84; });
+    EXPECT_TRUE(r.viewsConsistent);
+    const auto& ids = r.ids;
+    const int incoherent = r.incoherent;
+    const std::size_t maxTracks = r.maxTracks;
     std::array<int, 3> n{0, 0, 0};  // dynamic among the point-like movers, among the sliding ones, static stills
     for (std::size_t i = 0; i < ids.size(); ++i)
     {
-      const auto it = decided.find(ids[i]);
-      if (it == decided.end()) continue;
-      if (i < 5) n[0] += it->second == EShadowClass::Dynamic ? 1 : 0;
-      else if (i < 10) n[1] += it->second == EShadowClass::Dynamic ? 1 : 0;
-      else n[2] += it->second == EShadowClass::Static ? 1 : 0;
+      const auto it = r.decided.find(ids[i]);
+      if (it == r.decided.end()) continue;
+      if (i < 5) n[0] += it->second.first == EShadowClass::Dynamic ? 1 : 0;
+      else if (i < 10) n[1] += it->second.first == EShadowClass::Dynamic ? 1 : 0;
+      else n[2] += it->second.first == EShadowClass::Static ? 1 : 0;
     }
     std::printf("[ info     ] min_point_ncc %.2f: dynamic %d / 5 point-like and %d / 5 sliding, %d / 5 stills static, "
                 "%d held without decision, at most %zu tracks\n", minPointNcc, n[0], n[1], n[2], incoherent, maxTracks);
