@@ -200,6 +200,18 @@ void CRefineSink::onFrame(const TFrameResult& r)
                                                                             : eval::ESearchStatus::Inlier;
       m_rows.push_back(row);
     }
+  // The shadow filter's past matches of the features that turned out static (as the smoother).
+  m_stamps.push_back(rep.timestamp);
+  for (const auto& hm : m_heldBack.update(m_stamps.size() - 1, r.report.shadow, r.slam))
+  {
+    eval::TSearchRow row;
+    row.timestamp = m_stamps[hm.frame];
+    row.featureId = hm.id;
+    row.found = true;
+    row.z = hm.uv;
+    row.status = eval::ESearchStatus::Inlier;
+    m_rows.push_back(row);
+  }
 }
 
 void CRefineSink::onEnd(const slam::CMonoSlamIMM&, TRunSummary& summary)

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <unordered_map>
+#include <unordered_set>
 
 #include <chrono>
 #include <iomanip>
@@ -65,7 +66,19 @@ void CTrajectorySmoothing::addFrame(const system::TSystemFrame& fr, const slam::
       f.matches[it->second].depthRelSigma = rel;
     }
   }
+  // The shadow filter's past matches of the features that turned out static.
+  for (const auto& hm : m_heldBack.update(m_frames, fr.shadow, slam))
+  {
+    const math::Bearing b = m_cam.unproject(hm.uv);
+    const Vec3& d = b.unitVector();
+    if (!(d.z() > 0)) continue;
+    refine::TSmootherMatch m;
+    m.featureId = hm.id;
+    m.xn = Vec2(d.x() / d.z(), d.y() / d.z());
+    f.past.emplace_back(hm.frame, m);
+  }
   m_smoother.addFrame(std::move(f));
+  ++m_frames;
 }
 
 void CTrajectorySmoothing::finish(const std::string& path, const std::optional<core::TTrajectory>& gt,

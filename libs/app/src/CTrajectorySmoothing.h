@@ -6,11 +6,15 @@
 #include <immslam/app/CImmMonoSlamApp.h>
 #include <immslam/camera/CCameraModel.h>
 #include <immslam/refine/CKeyframeSmoother.h>
+#include <immslam/system/CHeldBackMatches.h>
 #include <immslam/system/CMonoSlamSystem.h>
 
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
 
 namespace immslam::app::detail
 {
@@ -42,6 +46,8 @@ class CTrajectorySmoothing
 
  private:
   const camera::CCameraModel& m_cam;
+  std::size_t m_frames = 0;  ///< frames given to the smoother
+  system::CHeldBackMatches m_heldBack;  ///< the shadow filter's matches of features not yet known static
   refine::CKeyframeSmoother m_smoother;
   core::TTrajectory m_result;
 };

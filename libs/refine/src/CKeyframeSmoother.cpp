@@ -69,6 +69,12 @@ CKeyframeSmoother::~CKeyframeSmoother()
 
 void CKeyframeSmoother::addFrame(TSmootherFrame frame)
 {
+  {
+    std::lock_guard<std::mutex> lk(m_mutex);
+    for (const auto& pm : frame.past)
+      if (pm.first > m_given)  // m_given: this frame's index
+        throw std::logic_error("CKeyframeSmoother::addFrame: a past match of a frame not given yet");
+  }
   if (m_opts.synchronous)
   {
     if (m_finished) throw std::logic_error("CKeyframeSmoother::addFrame after finish()");
@@ -200,6 +206,13 @@ bool CKeyframeSmoother::ingest(TSmootherFrame&& frame)
   std::lock_guard<std::mutex> lk(m_mutex);
   m_framePoses.push_back(frame.pose);
   m_frameMatches.push_back(std::move(frame.matches));
+  // The matches that came late, into their frames (this one's too: after the choice of keyframes).
+  for (const auto& [at, m] : frame.past)
+  {
+    auto& ms = m_frameMatches[at];
+    if (std::none_of(ms.begin(), ms.end(), [&](const TSmootherMatch& o) { return o.featureId == m.featureId; }))
+      ms.push_back(m);
+  }
   m_frameRefined.emplace_back();
   ++m_stats.frames;
   if (!isKeyframe)
@@ -397,6 +410,7 @@ void CKeyframeSmoother::refineFrames(std::size_t firstFrame, const TBundleProble
     bo.huberPx = m_opts.huberPx;
     bo.maxIterations = 10;
     bo.holdPoints = true;
+    bo.outlierFactor = 0;  // one pose: its own pass below, which keeps minMatches measurements
     const core::TStampedPose start = f.poses[0];
     bundleAdjust(f, bo);
     // One frame's pose rests on a few dozen points: a single one the window placed badly (a point

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 
 namespace immslam::refine
@@ -106,6 +107,36 @@ ceres::Solver::Options solverOptions(std::size_t nPoses, const TBundleOptions& o
 }
 
 double huberCost(double n, double k) { return n <= k ? n * n : 2 * k * n - k * k; }
+
+/** The reprojection error (pixels) of every used measurement at the current blocks (infinity for
+ * the others). */
+std::vector<double> currentErrors(const TBundleProblem& p, const std::vector<TPoseBlocks>& poses,
+                                  const std::vector<Vec3>& X, const std::vector<char>& used)
+{
+  std::vector<double> err(p.obs.size(), std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < p.obs.size(); ++i)
+  {
+    if (!used[i]) continue;
+    const auto& o = p.obs[i];
+    const Mat3 R_CW = Eigen::Quaterniond(poses[o.pose].q[3], poses[o.pose].q[0], poses[o.pose].q[1], poses[o.pose].q[2])
+                          .normalized()
+                          .toRotationMatrix();
+    Vec2 r;
+    if (reprojectionResidual(R_CW, Vec3(poses[o.pose].t[0], poses[o.pose].t[1], poses[o.pose].t[2]), X[o.point], o.xn,
+                             p.fx, p.fy, r))
+      err[i] = r.norm();
+  }
+  return err;
+}
+
+/** TBundleOptions::outlierFactor times the median of the finite errors, at least outlierMinPx. */
+double outlierLimit(std::vector<double> err, const TBundleOptions& opts)
+{
+  err.erase(std::remove_if(err.begin(), err.end(), [](double e) { return !std::isfinite(e); }), err.end());
+  if (err.empty()) return std::numeric_limits<double>::infinity();
+  std::nth_element(err.begin(), err.begin() + static_cast<std::ptrdiff_t>(err.size() / 2), err.end());
+  return std::max(opts.outlierMinPx, opts.outlierFactor * err[err.size() / 2]);
+}
 }  // namespace
 
 TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
@@ -141,12 +172,13 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
   ceres::EigenQuaternionManifold quaternion;
   ceres::HuberLoss huber(opts.huberPx);  // rho(s) = s or 2 k sqrt(s) - k^2: the cost above
   std::vector<Vec3> X = p.points;
+  std::vector<ceres::ResidualBlockId> blocks(p.obs.size(), nullptr);
   for (std::size_t i = 0; i < p.obs.size(); ++i)
   {
     if (!used[i]) continue;
     const auto& o = p.obs[i];
     auto* cost = new ceres::AutoDiffCostFunction<TReprojectionCost, 2, 4, 3, 3>(new TReprojectionCost{o.xn, p.fx, p.fy});
-    problem.AddResidualBlock(cost, &huber, poses[o.pose].q, poses[o.pose].t, X[o.point].data());
+    blocks[i] = problem.AddResidualBlock(cost, &huber, poses[o.pose].q, poses[o.pose].t, X[o.point].data());
   }
   for (auto& b : poses)
     if (problem.HasParameterBlock(b.q)) problem.SetManifold(b.q, &quaternion);
@@ -171,13 +203,42 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
   }
   ceres::Solver::Summary summary;
   ceres::Solve(solverOptions(p.poses.size(), opts), &problem, &summary);
-
   res.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  if (opts.outlierFactor > 0)
+  {
+    // The measurements far outside the fitted errors leave the same problem, which is solved again.
+    const std::vector<double> err = currentErrors(p, poses, X, used);
+    const double limit = outlierLimit(err, opts);
+    for (std::size_t i = 0; i < p.obs.size(); ++i)
+      if (used[i] && err[i] > limit)
+      {
+        problem.RemoveResidualBlock(blocks[i]);
+        used[i] = 0;
+        ++res.outliers;
+      }
+    if (res.outliers > 0)
+    {
+      TBundleOptions again = opts;
+      again.maxIterations = std::min(opts.maxIterations, opts.outlierIterations);
+      ceres::Solve(solverOptions(p.poses.size(), again), &problem, &summary);
+      res.iterations += static_cast<int>(summary.iterations.size()) - 1;
+    }
+  }
+
   res.converged = summary.termination_type == ceres::CONVERGENCE;
   // Ceres' cost is 1/2 sum rho(|r|^2): twice it per measurement is the cost above.
-  res.finalCost = 2 * summary.final_cost / static_cast<double>(nUsed);
+  res.finalCost = 2 * summary.final_cost / static_cast<double>(std::max<std::size_t>(1, nUsed - res.outliers));
   for (std::size_t i = 0; i < p.poses.size(); ++i) fromBlocks(poses[i], p.poses[i]);
   p.points = X;
+  if (res.outliers > 0)
+  {
+    std::vector<TBundleObservation> kept;
+    kept.reserve(p.obs.size() - res.outliers);
+    for (std::size_t i = 0; i < p.obs.size(); ++i)
+      if (used[i] || !blocks[i]) kept.push_back(p.obs[i]);  // the unused ones stay, as without the pass
+    p.obs = std::move(kept);
+  }
   return res;
 }
+
 }  // namespace immslam::refine

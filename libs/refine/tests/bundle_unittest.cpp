@@ -203,7 +203,9 @@ TEST(Reprojection, CeresReachesTheCostOfTheFormerSolver)
   const TScene s = makeScene();
   const auto cam = pinhole();
   TBundleProblem a = makeBundleProblem(measure(s, *cam, 0.5), bend(s.poses, 3.0), *cam, 1e-4, 8);
-  const TBundleResult ra = bundleAdjust(a);
+  TBundleOptions o;
+  o.outlierFactor = 0;  // the cost of every measurement, as the former solver had it
+  const TBundleResult ra = bundleAdjust(a, o);
   EXPECT_NEAR(ra.initialCost, 42.122039941, 1e-8);
   EXPECT_NEAR(ra.finalCost, 0.451528991, 1e-8);
   EXPECT_TRUE(ra.converged);
@@ -249,4 +251,52 @@ TEST(Reprojection, AScaleGaugeKeepsTheDistanceBetweenTwoPoses)
   bundleAdjust(p, o);
   EXPECT_NEAR((p.poses[last].p_W_C - p.poses[0].p_W_C).norm(), d0, 1e-6 * d0);
   EXPECT_LT(rmsAfterSim3(p.poses, s.poses), 0.005);
+}
+
+TEST(Reprojection, AnOutlierPassTakesOutATrackThatSlidesAndKeepsTheRest)
+{
+  // Three of the 50 features are no fixed point: their corners slide along an edge, 0.3 px further
+  // every frame (a T-junction, an occluding contour), and a fourth is mismatched 6 px off in one
+  // frame of three. The Huber cost bounds each measurement's pull but not the pull of a whole track that
+  // agrees with itself; the outlier pass removes what lies beyond 3 times the median error once the
+  // rest is fitted, and the trajectory comes back to what the good features give.
+  const TScene s = makeScene();
+  const auto cam = pinhole();
+  std::vector<eval::TSearchRow> rows = measure(s, *cam, 0.5);
+  std::size_t bad = 0, far = 0;  // measurements moved; of them, moved 3 px or more
+  for (auto& r : rows)
+  {
+    const int frame = static_cast<int>(std::lround(r.timestamp / 0.1));
+    if (r.featureId >= 100 && r.featureId <= 102) r.z.x() += 0.3 * frame, ++bad, far += frame >= 10 ? 1 : 0;
+    if (r.featureId == 103 && frame % 3 == 0) r.z.y() += 6, ++bad, ++far;
+  }
+  const std::vector<eval::TSearchRow> good = [&] {
+    std::vector<eval::TSearchRow> g;
+    for (const auto& r : rows)
+      if (r.featureId > 103) g.push_back(r);
+    return g;
+  }();
+  const auto refine = [&](const std::vector<eval::TSearchRow>& rs, double factor, TBundleResult* res = nullptr) {
+    TBundleProblem p = makeBundleProblem(rs, bend(s.poses, 3.0), *cam, 1e-4, 8);
+    TBundleOptions o;
+    o.outlierFactor = factor;
+    const TBundleResult r = bundleAdjust(p, o);
+    if (res) *res = r;
+    return rmsAfterSim3(p.poses, s.poses);
+  };
+  TBundleResult withPass;
+  const double cleanAte = refine(good, 0), huberOnly = refine(rows, 0), passed = refine(rows, 3, &withPass);
+  std::printf("ATE after Sim(3): good features only %.5f, all with the Huber cost alone %.5f, with the outlier pass "
+              "%.5f; %zu of %zu measurements removed (%zu moved, %zu by 3 px or more)\n",
+              cleanAte, huberOnly, passed, withPass.outliers, rows.size(), bad, far);
+  // Measured: 0.00829, 0.01103, 0.00817; 91 removed (196 moved, 166 by 3 px or more).
+  EXPECT_LT(passed, 0.8 * huberOnly);
+  EXPECT_LT(passed, 1.1 * cleanAte);
+  EXPECT_GE(withPass.outliers, far / 2);
+  EXPECT_LE(withPass.outliers, bad + rows.size() / 100);  // at most 1 % of the good ones
+
+  // Without outliers the pass leaves the measurements alone (0.2 % beyond 3.5 sigma).
+  TBundleResult clean;
+  refine(good, 3, &clean);
+  EXPECT_LE(clean.outliers, good.size() / 100);
 }

@@ -367,3 +367,48 @@ TEST(KeyframeSmoother, AFrameBetweenKeyframesIsNotPulledByOneOutlyingMeasurement
   // with it by what leaving that one feature out changes.
   EXPECT_LT(withOutlier, 0.001);
 }
+
+TEST(KeyframeSmoother, MatchesThatComeLateJoinTheFramesTheyWereMeasuredIn)
+{
+  // A third of the features are held back for their first 25 frames (the shadow filter's pending
+  // features: measured, not yet known static), each feature from its own frame on, and handed over
+  // with the frame that ends their wait (TSmootherFrame::past). The smoother then has what it
+  // would have had with every match in time, nearly: closer to the truth than without those
+  // matches, and a late match of a feature its frame already measures changes nothing.
+  const test::TScene s = test::makeScene(150, 45);
+  const auto inTime = filterFrames(s);
+  constexpr std::size_t kWait = 25;
+  auto dropped = inTime, late = inTime;
+  for (std::size_t i = 0; i < inTime.size(); ++i)
+  {
+    const auto held = [&](const TSmootherMatch& m) {
+      const std::size_t born = static_cast<std::size_t>(m.featureId % 5) * 20;  // features start at 0, 20, ..., 80
+      return m.featureId % 3 == 0 && i >= born && i < born + kWait;
+    };
+    dropped[i].matches.erase(std::remove_if(dropped[i].matches.begin(), dropped[i].matches.end(), held),
+                             dropped[i].matches.end());
+    late[i].matches = dropped[i].matches;
+    for (const auto& m : inTime[i].matches)
+      if (held(m)) late[std::min(i + kWait, inTime.size() - 1)].past.emplace_back(i, m);
+  }
+  const double aTime = test::rmsAfterSim3(smooth(inTime, true), s.poses);
+  const double aDropped = test::rmsAfterSim3(smooth(dropped, true), s.poses);
+  const double aLate = test::rmsAfterSim3(smooth(late, true), s.poses);
+  std::printf("ATE after Sim(3): every match in time %.5f, held-back matches dropped %.5f, handed over late %.5f\n",
+              aTime, aDropped, aLate);
+  EXPECT_LT(aLate, aDropped);
+  EXPECT_LT(aLate, 1.2 * aTime);
+
+  // A late match of a feature its frame measured already: the frame keeps its own.
+  auto duplicate = late;
+  duplicate[40].past.emplace_back(30, inTime[30].matches.front());
+  duplicate[40].past.back().second.xn += Vec2(20.0 / kF, 0);
+  const core::TTrajectory a = smooth(late, true), b = smooth(duplicate, true);
+  for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i].p_W_C, b[i].p_W_C) << i;
+
+  // A match of a frame not given yet is refused.
+  CKeyframeSmoother sm(testOptions(true), kF, kF);
+  TSmootherFrame f = inTime[0];
+  f.past.emplace_back(1, inTime[1].matches.front());
+  EXPECT_THROW(sm.addFrame(f), std::logic_error);
+}

@@ -17,6 +17,7 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace immslam::refine
@@ -37,6 +38,11 @@ struct TSmootherFrame
 {
   core::TStampedPose pose;
   std::vector<TSmootherMatch> matches;
+  /** Matches of earlier frames (or of this one) that became usable with this frame, with the index
+   * of their frame (0 = the first frame given): the measurements of a feature the filter held
+   * back until it knew the feature static (the shadow filter's pending features). They take no part
+   * in the choice of keyframes, and a feature a frame already measured keeps its match there. */
+  std::vector<std::pair<std::size_t, TSmootherMatch>> past;
 };
 
 /** A keyframe as published: its frame, the filter's pose and the smoothed one. */
@@ -152,7 +158,8 @@ class CKeyframeSmoother
   CKeyframeSmoother& operator=(const CKeyframeSmoother&) = delete;
 
   /** Hands a frame over (never waits for an optimisation). Frames must come in time order.
-   * \throws std::logic_error after finish(). */
+   * \throws std::logic_error after finish(), or for a past match (TSmootherFrame::past) of a frame
+   *         after this one. */
   void addFrame(TSmootherFrame frame);
 
   /** The keyframes as published so far (a copy, safe while the worker runs: for a live scene). */
