@@ -137,6 +137,41 @@ double outlierLimit(std::vector<double> err, const TBundleOptions& opts)
   std::nth_element(err.begin(), err.begin() + static_cast<std::ptrdiff_t>(err.size() / 2), err.end());
   return std::max(opts.outlierMinPx, opts.outlierFactor * err[err.size() / 2]);
 }
+
+/** The measurements the outlier pass removed (a block, no longer used) leave the problem; those
+ * never used (their point behind the camera) stay, as without the pass. */
+void eraseRemoved(TBundleProblem& p, const std::vector<char>& used, const std::vector<ceres::ResidualBlockId>& blocks)
+{
+  std::vector<TBundleObservation> kept;
+  kept.reserve(p.obs.size());
+  for (std::size_t i = 0; i < p.obs.size(); ++i)
+    if (used[i] || !blocks[i]) kept.push_back(p.obs[i]);
+  p.obs = std::move(kept);
+}
+
+/** TBundleOptions::outlierFactor: the measurements far outside the fitted errors leave the same
+ * problem (their residual blocks removed, `used` cleared, counted in res.outliers), which is solved
+ * again (`summary`: the last solve's). */
+void outlierPass(ceres::Problem& problem, const TBundleProblem& p, const std::vector<TPoseBlocks>& poses,
+                 const std::vector<Vec3>& X, const std::vector<ceres::ResidualBlockId>& blocks,
+                 const TBundleOptions& opts, std::vector<char>& used, TBundleResult& res,
+                 ceres::Solver::Summary& summary)
+{
+  const std::vector<double> err = currentErrors(p, poses, X, used);
+  const double limit = outlierLimit(err, opts);
+  for (std::size_t i = 0; i < p.obs.size(); ++i)
+    if (used[i] && err[i] > limit)
+    {
+      problem.RemoveResidualBlock(blocks[i]);
+      used[i] = 0;
+      ++res.outliers;
+    }
+  if (res.outliers == 0) return;
+  TBundleOptions again = opts;
+  again.maxIterations = std::min(opts.maxIterations, opts.outlierIterations);
+  ceres::Solve(solverOptions(p.poses.size(), again), &problem, &summary);
+  res.iterations += static_cast<int>(summary.iterations.size()) - 1;
+}
 }  // namespace
 
 TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
@@ -204,40 +239,14 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
   ceres::Solver::Summary summary;
   ceres::Solve(solverOptions(p.poses.size(), opts), &problem, &summary);
   res.iterations = static_cast<int>(summary.iterations.size()) - 1;
-  if (opts.outlierFactor > 0)
-  {
-    // The measurements far outside the fitted errors leave the same problem, which is solved again.
-    const std::vector<double> err = currentErrors(p, poses, X, used);
-    const double limit = outlierLimit(err, opts);
-    for (std::size_t i = 0; i < p.obs.size(); ++i)
-      if (used[i] && err[i] > limit)
-      {
-        problem.RemoveResidualBlock(blocks[i]);
-        used[i] = 0;
-        ++res.outliers;
-      }
-    if (res.outliers > 0)
-    {
-      TBundleOptions again = opts;
-      again.maxIterations = std::min(opts.maxIterations, opts.outlierIterations);
-      ceres::Solve(solverOptions(p.poses.size(), again), &problem, &summary);
-      res.iterations += static_cast<int>(summary.iterations.size()) - 1;
-    }
-  }
+  if (opts.outlierFactor > 0) outlierPass(problem, p, poses, X, blocks, opts, used, res, summary);
 
   res.converged = summary.termination_type == ceres::CONVERGENCE;
   // Ceres' cost is 1/2 sum rho(|r|^2): twice it per measurement is the cost above.
   res.finalCost = 2 * summary.final_cost / static_cast<double>(std::max<std::size_t>(1, nUsed - res.outliers));
   for (std::size_t i = 0; i < p.poses.size(); ++i) fromBlocks(poses[i], p.poses[i]);
   p.points = X;
-  if (res.outliers > 0)
-  {
-    std::vector<TBundleObservation> kept;
-    kept.reserve(p.obs.size() - res.outliers);
-    for (std::size_t i = 0; i < p.obs.size(); ++i)
-      if (used[i] || !blocks[i]) kept.push_back(p.obs[i]);  // the unused ones stay, as without the pass
-    p.obs = std::move(kept);
-  }
+  if (res.outliers > 0) eraseRemoved(p, used, blocks);
   return res;
 }
 
