@@ -351,6 +351,7 @@ void CKeyframeSmoother::optimiseWindow()
   TBundleOptions bo;
   bo.huberPx = m_opts.huberPx;
   bo.maxIterations = m_opts.maxIterations;
+  bo.outlierIterations = 10;  // the outlier pass's second solve starts near its minimum
   if (anchors.size() < 2) bo.maxIterations = m_opts.gaugeMaxIterations;
   // A long window starts from the poses the short windows placed (and those of the run's start too).
   if (isLong) bo.maxIterations = m_opts.longWindowMaxIterations;

@@ -28,13 +28,15 @@ struct TBundleOptions
   std::vector<std::size_t> scalePoses;
   /** Outlier pass: once the adjustment has converged, the measurements whose reprojection error
    * exceeds this many times the median error (and outlierMinPx) are removed and the problem solved
-   * again (at most outlierIterations more iterations). For Gaussian image noise the median error is
+   * again (outlierIterations). For Gaussian image noise the median error is
    * 1.18 sigma, so 3 times it is 3.5 sigma (0.2 % of good measurements); a mismatch, or a track that
    * slides along an edge (a T-junction, an occluding contour: no fixed point), stays far outside
    * once the rest is fitted, where the Huber cost alone still lets it pull. 0: no pass. */
   double outlierFactor = 3;
   double outlierMinPx = 0.5;   ///< the pass never removes a measurement within this error (pixels)
-  int outlierIterations = 10;  ///< iterations of the second solve
+  /** Iterations of the second solve (at most maxIterations): the first solve's minimum is a close
+   * start. A window of the online smoother takes 10 (it runs often, and 5 gave the same poses). */
+  int outlierIterations = 100;
 };
 
 /** What a bundle adjustment did. */
