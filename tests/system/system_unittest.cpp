@@ -164,8 +164,9 @@ TEST(SystemRealData, VispRbtGroundTruthDisagreesWithTheImagesAndTheEstimateAgree
   // every measurement to the matching noise (a bundle adjustment, the same from the AprilTag start and
   // from the SLAM's). That trajectory is ~1.75 % of path from the AprilTag poses and its relative
   // translation directions ~30 deg from theirs; the IMM's estimate is within 1 % of path and a few
-  // degrees of it. Measured: GT 22/44 features above 2 px; BA vs GT 1.75 %, 30 deg (10 frames);
-  // estimate vs BA 0.67 %, 2.2 deg. (synth19's exact ground truth, below, shows none of this.)
+  // degrees of it. Measured: GT 22/43 features above 2 px; BA vs GT 1.75 %, 30 deg (10 frames);
+  // estimate vs BA 0.63 %, 2.9 deg (0.67 %, 2.2 deg against the adjustment without its outlier
+  // pass). (synth19's exact ground truth, below, shows none of this.)
   if (!haveSharedData("visp_rbt")) GTEST_SKIP() << "../shared/data/visp_rbt is absent";
   const auto out = outDir("visp_reprojection");
   ASSERT_EQ(runApp({sourceDir() + "/ini/imm7.ini", sharedData("visp_rbt"), "--out", out,
@@ -190,9 +191,9 @@ TEST(SystemRealData, VispRbtGroundTruthDisagreesWithTheImagesAndTheEstimateAgree
   EXPECT_LT(baVsBa, 1e-4);
   EXPECT_GT(baVsGt, 0.012);
   EXPECT_GT(dirBaGt, 15.0);
-  // The estimate's figures at ~1.2x the measured ones (2026-11-27: 0.67 % of path, 2.2 deg).
-  EXPECT_LT(estVsBa, 0.0081);
-  EXPECT_LT(dirEstBa, 2.7);
+  // The estimate's figures at ~1.2x the measured ones (0.63 % of path, 2.9 deg).
+  EXPECT_LT(estVsBa, 0.0076);
+  EXPECT_LT(dirEstBa, 3.5);
 }
 
 TEST(SystemRealData, ExactGroundTruthAndLongRealRunAgreeWithTheirMeasurements)
