@@ -6,7 +6,6 @@
 
 #include <cmath>
 #include <unordered_map>
-#include <unordered_set>
 
 #include <chrono>
 #include <iomanip>

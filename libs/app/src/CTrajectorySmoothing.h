@@ -12,9 +12,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <unordered_map>
-#include <utility>
-#include <vector>
 
 namespace immslam::app::detail
 {

@@ -97,7 +97,7 @@ class CRefineSink : public IFrameSink
   const CSmoothingSink* m_smoothing;     ///< null: the run does not smooth
   std::vector<eval::TSearchRow> m_rows;  ///< matches used in the updates, and held-back ones
   std::vector<double> m_stamps;          ///< timestamp of every frame so far
-  system::CHeldBackMatches m_heldBack;           ///< the shadow filter's matches of features not yet known static
+  system::CHeldBackMatches m_heldBack;   ///< the shadow filter's matches of features not yet known static
 };
 
 /** The progress line on a terminal, at most every 0.2 s (frame, rate, map, matches, dominant model,
