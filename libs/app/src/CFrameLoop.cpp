@@ -88,7 +88,9 @@ bool CFrameLoop::nextFrame(io::TFrame& frame, const std::atomic<bool>& stop)
 void CFrameLoop::publish(const io::TFrame& frame, const std::vector<IFrameSink*>& sinks)
 {
   const system::TSystemFrame& fr = process(frame);
-  const TFrameResult result{m_summary.framesProcessed, frame, fr, m_sys.slam()};
+  const std::vector<system::CHeldBackMatches::TMatch> heldBack =
+      m_heldBack.update(m_summary.framesProcessed, fr.shadow, m_sys.slam());
+  const TFrameResult result{m_summary.framesProcessed, frame, fr, m_sys.slam(), heldBack};
   for (IFrameSink* s : sinks) s->onFrame(result);
   ++m_summary.framesProcessed;
   m_lastTimestamp = frame.timestamp;

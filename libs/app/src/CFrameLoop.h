@@ -52,5 +52,7 @@ class CFrameLoop
   const TImageReduction m_reduction;
   TRunSummary& m_summary;
   double m_lastTimestamp = -std::numeric_limits<double>::infinity();
+  /** The shadow filter's matches of features not yet known static (TFrameResult::heldBack). */
+  system::CHeldBackMatches m_heldBack;
 };
 }  // namespace immslam::app::detail

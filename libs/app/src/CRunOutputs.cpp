@@ -202,7 +202,7 @@ void CRefineSink::onFrame(const TFrameResult& r)
     }
   // The shadow filter's past matches of the features that turned out static (as the smoother).
   m_stamps.push_back(rep.timestamp);
-  for (const auto& hm : m_heldBack.update(m_stamps.size() - 1, r.report.shadow, r.slam))
+  for (const auto& hm : r.heldBack)
   {
     eval::TSearchRow row;
     row.timestamp = m_stamps[hm.frame];
@@ -231,7 +231,10 @@ CSmoothingSink::CSmoothingSink(const TRunInputs& in, const COutputFiles& files, 
 {
 }
 
-void CSmoothingSink::onFrame(const TFrameResult& r) { m_smoothing.addFrame(r.report, r.slam, m_files.trajectory().back()); }
+void CSmoothingSink::onFrame(const TFrameResult& r)
+{
+  m_smoothing.addFrame(r.report, r.slam, m_files.trajectory().back(), r.heldBack);
+}
 
 void CSmoothingSink::onEnd(const slam::CMonoSlamIMM&, TRunSummary& summary)
 {

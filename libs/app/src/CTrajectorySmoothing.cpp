@@ -29,7 +29,8 @@ CTrajectorySmoothing::CTrajectorySmoothing(const camera::CCameraModel& cam, bool
 }
 
 void CTrajectorySmoothing::addFrame(const system::TSystemFrame& fr, const slam::CMonoSlamIMM& slam,
-                                    const core::TStampedPose& pose)
+                                    const core::TStampedPose& pose,
+                                    const std::vector<system::CHeldBackMatches::TMatch>& heldBack)
 {
   refine::TSmootherFrame f;
   f.pose = pose;
@@ -66,7 +67,7 @@ void CTrajectorySmoothing::addFrame(const system::TSystemFrame& fr, const slam::
     }
   }
   // The shadow filter's past matches of the features that turned out static.
-  for (const auto& hm : m_heldBack.update(m_frames, fr.shadow, slam))
+  for (const auto& hm : heldBack)
   {
     const math::Bearing b = m_cam.unproject(hm.uv);
     const Vec3& d = b.unitVector();
@@ -77,7 +78,6 @@ void CTrajectorySmoothing::addFrame(const system::TSystemFrame& fr, const slam::
     f.past.emplace_back(hm.frame, m);
   }
   m_smoother.addFrame(std::move(f));
-  ++m_frames;
 }
 
 void CTrajectorySmoothing::finish(const std::string& path, const std::optional<core::TTrajectory>& gt,

@@ -12,6 +12,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace immslam::app::detail
 {
@@ -26,8 +27,10 @@ class CTrajectorySmoothing
 
   /** One processed frame: the filter's pose and the low-innovation and rescued inliers of its
    * update, as undistorted normalised points, with how well the filter knows the depth of each
-   * (`slam`: the filter after the frame). */
-  void addFrame(const system::TSystemFrame& fr, const slam::CMonoSlamIMM& slam, const core::TStampedPose& pose);
+   * (`slam`: the filter after the frame), and the shadow filter's held-back matches it releases
+   * (their frames counted from the first frame given, as here). */
+  void addFrame(const system::TSystemFrame& fr, const slam::CMonoSlamIMM& slam, const core::TStampedPose& pose,
+                const std::vector<system::CHeldBackMatches::TMatch>& heldBack);
 
   /** Stops the smoother, writes `path` (TUM, every frame), fills the summary's smoothed ATE (when
    * `gt` is given), lag and CPU share, and logs one line. */
@@ -43,8 +46,6 @@ class CTrajectorySmoothing
 
  private:
   const camera::CCameraModel& m_cam;
-  std::size_t m_frames = 0;  ///< frames given to the smoother
-  system::CHeldBackMatches m_heldBack;  ///< the shadow filter's matches of features not yet known static
   refine::CKeyframeSmoother m_smoother;
   core::TTrajectory m_result;
 };

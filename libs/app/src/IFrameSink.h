@@ -5,6 +5,7 @@
 
 #include <immslam/app/CImmMonoSlamApp.h>
 #include <immslam/io/CImageSource.h>
+#include <immslam/system/CHeldBackMatches.h>
 #include <immslam/system/CMonoSlamSystem.h>
 
 #include <cstddef>
@@ -18,6 +19,10 @@ struct TFrameResult
   const io::TFrame& frame;             ///< index, timestamp, origin, images (after [input] max_image_width)
   const system::TSystemFrame& report;  ///< the system's report of the frame (SLAM, shadow filter, times)
   const slam::CMonoSlamIMM& slam;      ///< the filter after the frame: pose, map, model probabilities
+  /** The shadow filter's matches of earlier frames (and this one) whose features became known static
+   * with this frame (system::CHeldBackMatches; frame = `processed` of their frame), for the bundle
+   * adjustments behind the filter. */
+  const std::vector<system::CHeldBackMatches::TMatch>& heldBack;
 };
 
 /** A consumer of the frame loop's results. The loop knows only this interface; CRunOutputs decides

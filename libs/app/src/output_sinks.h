@@ -7,7 +7,6 @@
 #include <immslam/app/COutputFiles.h>
 #include <immslam/app/app_options.h>
 #include <immslam/eval/search_nis.h>
-#include <immslam/system/CHeldBackMatches.h>
 #include <immslam/viz/COverlayWriter.h>
 #include <immslam/viz/scene.h>
 
@@ -97,7 +96,6 @@ class CRefineSink : public IFrameSink
   const CSmoothingSink* m_smoothing;     ///< null: the run does not smooth
   std::vector<eval::TSearchRow> m_rows;  ///< matches used in the updates, and held-back ones
   std::vector<double> m_stamps;          ///< timestamp of every frame so far
-  system::CHeldBackMatches m_heldBack;   ///< the shadow filter's matches of features not yet known static
 };
 
 /** The progress line on a terminal, at most every 0.2 s (frame, rate, map, matches, dominant model,
