@@ -114,6 +114,10 @@ void CShadowFilter::predictAll(const TCameraMotion& motion)
   {
     predictShadowState(f.ekf, motion.dt, motion.t, m_motion.dq, covInc, m_sigmaA);
     f.track.advance(motion.frame, motion.dt, motion.t, m_motion.dq, covInc, motion.pNotTranslating);
+    f.age += motion.dt;
+    // Without a measured camera motion (TCameraMotion::measured) the views stop (no view, so no test
+    // and no decision) and start again at the next measurement of a measured frame (updateFeature).
+    if (!motion.measured && f.cls == EShadowClass::Pending) f.restartViews = true;
     f.searched = f.measured = false;
     if (!shadowInnovation(f.ekf, *m_cam, m_opts.sigma_pixel, f.predicted, f.S))
     {
@@ -131,7 +135,14 @@ void CShadowFilter::updateFeature(TShadowFeature& f, const Vec2& z)
   f.measured = true;
   f.missed = 0;
   ++f.nMeasured;
-  if (f.cls == EShadowClass::Pending) f.track.addView(z);
+  if (f.cls == EShadowClass::Pending && !f.restartViews)
+    f.track.addView(z);
+  else if (f.cls == EShadowClass::Pending && m_motion.measured)
+  {
+    // The first measurement after a frame without measured camera motion: the views start again here.
+    f.track.start(m_motion.frame, z);
+    f.restartViews = false;
+  }
   ++m_report.nMeasured;
 }
 
@@ -235,7 +246,7 @@ void CShadowFilter::recordDecision(const TShadowFeature& f, EShadowClass c, TDec
   info.uv = f.uv;
   info.timestamp = m_motion.timestamp;
   info.frame = m_motion.frame;
-  info.ageFrames = static_cast<int>(std::lround(f.track.elapsed));
+  info.ageFrames = static_cast<int>(std::lround(f.age));
   m_report.decisions.push_back(info);
 }
 
@@ -295,7 +306,7 @@ void CShadowFilter::classifyAndManage()
         ++m_report.nLost;
         continue;
       }
-      if (f.track.elapsed >= m_opts.max_pending_frames)
+      if (f.age >= m_opts.max_pending_frames)
       {
         ++m_report.nTimedOut;
         continue;
@@ -346,7 +357,7 @@ void CShadowFilter::endFrame()
     v.searched = f.searched;
     v.measured = f.measured;
     v.incoherent = f.incoherent;
-    v.ageFrames = static_cast<int>(std::lround(f.track.elapsed));
+    v.ageFrames = static_cast<int>(std::lround(f.age));
     m_report.views.push_back(v);
     if (f.cls == EShadowClass::Dynamic && !f.incoherent)
     {

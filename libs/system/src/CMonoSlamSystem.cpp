@@ -237,6 +237,8 @@ shadow::TCameraMotion CMonoSlamSystem::cameraMotion(double timestamp, double dt)
   // Increment covariance from the velocities' (t = v dt, dtheta = w dt, first order).
   m.cov_increment = m_slam->velocityCovariance() * dt * dt;
   m.pNotTranslating = notTranslatingProbability();
+  // Lost (the pose is a prediction) or relocalised (the increment holds the jump): no measured motion.
+  m.measured = !m_slam->lostThisFrame() && !m_slam->lastReport().relocalised;
   return m;
 }
 

@@ -14,7 +14,9 @@
  *  4. reports decisions, promotions (removed from the shadow filter), dynamic tracks in W, and drops
  *     pending features that time out or are lost and dynamic ones lost for too long: finishFrame().
  * New features are added by the caller after the frame (addFeatures), at pixels of the frame just
- * processed. Estimator library: no image, no OpenCV, no front end, no GUI, no file output. */
+ * processed. A frame whose camera motion the SLAM did not measure (TCameraMotion::measured: lost
+ * tracking, a relocalisation) is predicted and updated as any other, but nothing is classified in it,
+ * and the pending features' views start again after it. Estimator library: no image, no OpenCV, no front end, no GUI, no file output. */
 #pragma once
 
 #include <immslam/camera/CCameraModel.h>
@@ -41,6 +43,10 @@ struct TShadowFeature
   TShadowState ekf;                          ///< eqs. (1)-(5)
   TRayTrack track;                           ///< views for the classifier (relative poses in C0)
   std::int64_t firstFrame = 0;
+  double age = 0;                            ///< frames (nominal periods) since its first observation
+  /** The camera motion since its last view was not measured (TCameraMotion::measured): its views
+   * (track) start again at its next measurement in a measured frame. */
+  bool restartViews = false;
   int missed = 0;                            ///< consecutive frames without a match
   int nMeasured = 0;                         ///< frames with a match (the first observation included)
   Vec2 predicted = Vec2::Zero();             ///< predicted pixel of this frame

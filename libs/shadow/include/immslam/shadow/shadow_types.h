@@ -43,6 +43,12 @@ struct TCameraMotion
    * rotation families (0 when unknown, e.g. a single general model). It weighs the power of the
    * depth-free test in a static decision (CRayClassifier). */
   double pNotTranslating = 0;
+  /** The SLAM measured the camera in this frame. False while it has lost track (its pose is then the
+   * motion models' prediction) and in the frame a relocalisation put it back on its map (the increment
+   * then holds that jump, not the camera's motion). Without a measured motion the classifier neither
+   * tests nor decides, and every pending feature's views start again at its next measurement: the
+   * relative poses across the gap are not known (CShadowFilter). */
+  bool measured = true;
 
   /** The motion of a camera that moved from pose (r0, q0) to (r1, q1) (both T_W_C): t and dq of
    * the increment (covariances left zero). */

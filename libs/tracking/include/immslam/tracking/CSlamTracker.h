@@ -184,6 +184,9 @@ class CSlamTracker
     return m_opts.relocalise && m_lostFrames > 0 && m_lostFrames <= m_opts.relocalise_max_frames &&
            m_noMapFrames < m_opts.relocalise_patience;
   }
+  /** This frame was a lost frame (TOptions::relocalise's criterion: too few measurements used): the
+   * pose is the motion models' prediction, not a measurement. */
+  bool lostThisFrame() const { return m_lostFrames > 0; }
   /** Tracking is lost and the map was given up (relocalise_max_frames or relocalise_patience): the
    * features of the map are no longer expected in the image; new ones are needed at once (callers
    * count none of the map's as visible, and findNewFeatureCandidates() ignores their cells). The map's

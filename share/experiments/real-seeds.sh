@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# The real sequences over RANSAC draws: each configuration run on visp_rbt and monoslam_testseq with
+# [slam] seed = 1..N (1-point RANSAC's draws; one run is one draw, and on the 99 frames of visp_rbt one
+# draw can lose the path), the ATE after Sim(3) of trajectory.txt and trajectory_smoothed.txt (% of the
+# scene's extent) per seed, their median and mean, and the shadow filter's decisions (every dynamic
+# decision is false on these static scenes).
+#   visp_rbt          against VISP_REF (default: its ground truth, the AprilTag poses);
+#   monoslam_testseq  against TESTSEQ_REF (default: the bundle adjustment of an independent run's
+#                     matches, ini/single.ini's trajectory_refined.txt, made here).
+# Usage: share/experiments/real-seeds.sh [--build DIR] [--out DIR] [--seeds LIST] [--data DIR]
+#        (defaults: build, /tmp/real-seeds, 1-5, $IMMSLAM_SHARED_DATA_DIR or ../shared/data;
+#        share/experiments/args.sh)
+# Environment: CONFIGS (default "ini/imm7-shadow.ini ini/imm7.ini"), SET (extra imm-monoslam options
+#   for every run), VISP_REF and TESTSEQ_REF (reference trajectories: the COLMAP reconstructions of
+#   share/experiments/make-reference.sh, doc/experiments/references.md).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+source share/experiments/args.sh
+mapfile -t SEEDS < <(seq 1 5)
+args_parse "$@"
+read -r -a CONFIGS <<< "${CONFIGS:-ini/imm7-shadow.ini ini/imm7.ini}"
+read -r -a EXTRA <<< "${SET:-}"
+APP=$BUILD/bin/imm-monoslam
+EVAL=$BUILD/bin/slam-eval
+mkdir -p "$OUT"
+for seq in visp_rbt monoslam_testseq; do
+  [ -d "$DATA/$seq" ] || { echo "real-seeds: $DATA/$seq not found (--data)" >&2; exit 1; }
+done
+
+extent() {  # EST REF -> ATE % of extent, or - when the file is missing
+  [ -s "$1" ] || { echo -; return; }
+  "$EVAL" ate "$1" "$2" | awk '/ATE \/ extent/ { printf "%.2f", $(NF - 1) }'
+}
+stats() {  # VALUES... -> "median M mean A" (values that are - are left out)
+  printf '%s\n' "$@" | grep -v '^-$' | sort -g |
+    awk '{ v[NR] = $1; s += $1 } END { if (NR) printf "median %.2f mean %.2f", (NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2), s / NR; else printf "-" }'
+}
+
+VREF=${VISP_REF:-$DATA/visp_rbt/groundtruth.txt}
+if [ -n "${TESTSEQ_REF:-}" ]; then
+  TREF=$TESTSEQ_REF
+else
+  ref="$OUT/testseq_single_reference"
+  [ -s "$ref/trajectory_refined.txt" ] ||
+    "$APP" ini/single.ini "$DATA/monoslam_testseq" --out "$ref" --no-gui --quiet --set output.scene=false \
+      --set output.refine_trajectory=true > "$ref.log" 2>&1
+  TREF=$ref/trajectory_refined.txt
+fi
+
+for cfg in "${CONFIGS[@]}"; do
+  for seq in visp_rbt monoslam_testseq; do
+    ref=$VREF
+    [ "$seq" = monoslam_testseq ] && ref=$TREF
+    filt=() smo=() dyn=0 all=0
+    for s in "${SEEDS[@]}"; do
+      o="$OUT/$(basename "$cfg" .ini)-$seq-$s"
+      "$APP" "$cfg" "$DATA/$seq" --out "$o" --no-gui --quiet --set output.scene=false --set "slam.seed=$s" \
+        "${EXTRA[@]}" > "$o.log" 2>&1 || true
+      filt+=("$(extent "$o/trajectory.txt" "$ref")")
+      smo+=("$(extent "$o/trajectory_smoothed.txt" "$ref")")
+      if [ -s "$o/classifications.csv" ]; then
+        dyn=$((dyn + $(awk -F, 'NR > 1 && $3 == "dynamic"' "$o/classifications.csv" | wc -l)))
+        all=$((all + $(awk -F, 'NR > 1' "$o/classifications.csv" | wc -l)))
+      fi
+    done
+    printf '%-20s %-17s filter %s (%s) | smoothed %s (%s) | dynamic decisions %d of %d\n' "$(basename "$cfg")" "$seq" \
+      "${filt[*]}" "$(stats "${filt[@]}")" "${smo[*]}" "$(stats "${smo[@]}")" "$dyn" "$all"
+  done
+done
