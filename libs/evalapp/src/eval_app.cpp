@@ -6,6 +6,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <fstream>
 #include <iomanip>
 #include <optional>
 #include <ostream>
@@ -24,6 +25,7 @@ struct TAppOptions
   bool alignmentGiven = false;
   double maxDt = 0.01;
   int rpeDelta = 0;  // 0: no RPE
+  std::string rpeCsvPath;  // --rpe-csv: one row per relative motion ("" none)
   bool json = false;
   bool help = false;
 };
@@ -84,12 +86,18 @@ TAppOptions parseArgs(const std::vector<std::string>& args)
         throw TUsageError("--rpe: '" + *v2 + "' is not a frame delta >= 1");
       o.rpeDelta = static_cast<int>(d);
     }
+    else if (auto v3 = value("--rpe-csv"))
+    {
+      if (v3->empty()) throw TUsageError("--rpe-csv needs a file name");
+      o.rpeCsvPath = *v3;
+    }
     else if (a.size() > 1 && a[0] == '-')
       throw TUsageError("unknown option '" + a + "'");
     else
       positional.push_back(a);
   }
   if (o.help) return o;
+  if (!o.rpeCsvPath.empty() && o.rpeDelta == 0) throw TUsageError("--rpe-csv needs --rpe DELTA");
   if (positional.size() != 2)
     throw TUsageError("expected 2 files (EST.txt GT.txt), got " + std::to_string(positional.size()));
   o.estPath = positional[0];
@@ -130,6 +138,29 @@ core::TTrajectory readNonEmpty(const std::string& path)
   core::TTrajectory t = core::readTumTrajectory(path);
   if (t.empty()) throw std::runtime_error(path + ": no poses in trajectory file");
   return t;
+}
+
+/** --rpe-csv: every compared relative motion, in time order (TRpePairError; NaN written "nan").
+ * \throws std::runtime_error naming the file if it cannot be written. */
+void writeRpeCsv(const std::string& path, const TRpeResult& rpe)
+{
+  std::ostringstream s;
+  s.imbue(std::locale::classic());
+  s << std::setprecision(10);
+  s << "t_start,t_end,translation_error,rotation_error_deg,direction_error_deg,local_scale\n";
+  const auto num = [&](double v) -> std::ostream& { return std::isfinite(v) ? (s << v) : (s << "nan"); };
+  for (const auto& e : rpe.errors)
+  {
+    num(e.tStart) << ',';
+    num(e.tEnd) << ',';
+    num(e.translation) << ',';
+    num(e.rotationDeg) << ',';
+    num(e.directionDeg) << ',';
+    num(e.scaleRatio) << '\n';
+  }
+  std::ofstream f(path, std::ios::binary);
+  if (f) f << s.str();
+  if (!f || !f.flush()) throw std::runtime_error(path + ": cannot write the RPE table");
 }
 
 /** The --json report: one JSON object. */
@@ -218,7 +249,7 @@ std::string textReport(const TAppOptions& o, std::size_t nEst, std::size_t nGt, 
 std::string evalAppUsage(const std::string& prog)
 {
   return "Usage: " + prog +
-         " EST.txt GT.txt [--sim3|--se3|--no-align] [--max-dt S] [--rpe DELTA] [--json]\n"
+         " EST.txt GT.txt [--sim3|--se3|--no-align] [--max-dt S] [--rpe DELTA [--rpe-csv F]] [--json]\n"
          "Absolute trajectory error of an estimated trajectory against ground truth (both TUM\n"
          "format: 'timestamp tx ty tz qx qy qz qw'). Poses are associated by nearest timestamp,\n"
          "the estimate is aligned to the ground truth, and position errors are reported in\n"
@@ -228,6 +259,9 @@ std::string evalAppUsage(const std::string& prog)
          "  --no-align   no alignment\n"
          "  --max-dt S   largest timestamp difference of an associated pair, seconds (default 0.01)\n"
          "  --rpe DELTA  also report the relative pose error over DELTA associated frames\n"
+         "  --rpe-csv F  write each of those relative motions' errors to the CSV file F (t_start,\n"
+         "               t_end, translation_error, rotation_error_deg, direction_error_deg,\n"
+         "               local_scale): where along the run the estimate went wrong\n"
          "  --json       print one JSON object instead of text\n"
          "  --help       this text\n"
          "Exit status: 0 success, 1 bad input, 2 bad usage.\n";
@@ -270,6 +304,7 @@ int runEvalApp(const std::vector<std::string>& args, std::ostream& out, std::ost
     {
       throw std::runtime_error(o.estPath + " vs " + o.gtPath + ": " + e.what());
     }
+    if (!o.rpeCsvPath.empty()) writeRpeCsv(o.rpeCsvPath, *rpe);
   }
   catch (const std::exception& e)
   {

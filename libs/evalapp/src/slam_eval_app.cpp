@@ -334,7 +334,7 @@ std::string slamEvalAppUsage(const std::string& prog)
 {
   return "Usage: " + prog + " COMMAND ARGS... [options]   (" + prog + " COMMAND --help for details)\n"
          "Evaluation of imm-monoslam's outputs against ground truth.\n"
-         "  " + prog + " ate EST.txt GT.txt [--sim3|--se3|--no-align] [--max-dt S] [--rpe DELTA] [--json]\n"
+         "  " + prog + " ate EST.txt GT.txt [--sim3|--se3|--no-align] [--max-dt S] [--rpe DELTA [--rpe-csv F]] [--json]\n"
          "      absolute trajectory error after Sim(3) (default) or SE(3) alignment, also relative to\n"
          "      the path length; RPE over DELTA frames. '" + prog + " EST.txt GT.txt ...' is the same.\n"
          "  " + prog + " segmentation model_probabilities.csv motion_labels.txt [--exclude S]\n"

@@ -92,3 +92,57 @@ TEST(EvalApp, ExitCodesAndReport)
   EXPECT_EQ(run({tempPath("nope.txt"), g}, nullptr, &err), 1);
   EXPECT_NE(err.find("nope.txt"), std::string::npos) << err;
 }
+
+// --rpe-csv: every relative motion's errors, one row each, where along the run they are.
+TEST(EvalApp, RpeCsvHasARowPerRelativeMotionAndMarksTheFramesThatWentWrong)
+{
+  const core::TTrajectory gt = makeTrajectory(100);
+  core::TTrajectory est = moved(gt);
+  // The estimate turned by 2 degrees (about the world's z) from pose 60 on: only the motion 59 -> 60
+  // (delta 1) has a rotation error.
+  const Vec4 dq = math::quatFromRotationVector(Vec3(0, 0, 2 * M_PI / 180));
+  for (std::size_t k = 60; k < est.size(); ++k) est[k].q_W_C = math::quatMultiply(dq, est[k].q_W_C);
+  const std::string g = tempPath("csv_gt.txt"), e = tempPath("csv_est.txt"), csv = tempPath("rpe.csv");
+  core::writeTumTrajectory(gt, g);
+  core::writeTumTrajectory(est, e);
+  std::filesystem::remove(csv);
+  const auto run = [](std::vector<std::string> args, std::string* err = nullptr) {
+    args.insert(args.begin(), "slam-eval ate");
+    std::ostringstream o, r;
+    const int rc = runEvalApp(args, o, r);
+    if (err) *err = r.str();
+    return rc;
+  };
+  ASSERT_EQ(run({e, g, "--rpe", "1", "--rpe-csv", csv}), 0);
+  std::ifstream f(csv);
+  std::string line;
+  ASSERT_TRUE(std::getline(f, line));
+  EXPECT_EQ(line, "t_start,t_end,translation_error,rotation_error_deg,direction_error_deg,local_scale");
+  int rows = 0, wrong = 0;
+  while (std::getline(f, line))
+  {
+    ++rows;
+    std::vector<double> v;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) v.push_back(std::stod(c));
+    ASSERT_EQ(v.size(), 6u) << line;
+    EXPECT_NEAR(v[1] - v[0], 1.0 / 30, 1e-6) << line;
+    if (v[3] > 1)
+    {
+      ++wrong;
+      EXPECT_NEAR(v[3], 2.0, 1e-6) << line;
+      EXPECT_NEAR(v[0], 100.0 + 59.0 / 30, 1e-6) << line;
+    }
+    else
+      EXPECT_LT(v[3], 1e-6) << line;
+  }
+  EXPECT_EQ(rows, 99);
+  EXPECT_EQ(wrong, 1);
+  // Bad use and a file that cannot be written: exit codes 2 and 1, the file named.
+  EXPECT_EQ(run({e, g, "--rpe-csv", csv}), 2);
+  EXPECT_EQ(run({e, g, "--rpe", "1", "--rpe-csv"}), 2);
+  std::string err;
+  const std::string nowhere = tempPath("no_such_dir/rpe.csv");
+  EXPECT_EQ(run({e, g, "--rpe", "1", "--rpe-csv", nowhere}, &err), 1);
+  EXPECT_NE(err.find(nowhere), std::string::npos) << err;
+}

@@ -7,7 +7,7 @@
 
 namespace immslam::evalapp
 {
-/** Runs `PROG EST.txt GT.txt [--sim3|--se3|--no-align] [--max-dt S] [--rpe DELTA] [--json]`:
+/** Runs `PROG EST.txt GT.txt [--sim3|--se3|--no-align] [--max-dt S] [--rpe DELTA [--rpe-csv F]] [--json]`:
  * reads two TUM trajectories, computes the ATE (computeAte) and prints it as text or JSON to out.
  * This is `slam-eval ate` (runSlamEvalApp(), slam_eval_app.h, calls it with PROG = "slam-eval ate").
  * \param args the command line, args[0] being the program name.

@@ -24,7 +24,7 @@ struct TSlamEvalTruthSources
 };
 
 /** Runs `slam-eval`, the evaluation of imm-monoslam's outputs against ground truth:
- * - `slam-eval ate EST.txt GT.txt [--sim3|--se3|--no-align] [--max-dt S] [--rpe DELTA] [--json]`:
+ * - `slam-eval ate EST.txt GT.txt [--sim3|--se3|--no-align] [--max-dt S] [--rpe DELTA [--rpe-csv F]] [--json]`:
  *   ATE after alignment (and RPE) of TUM trajectories (runEvalApp(); `slam-eval EST.txt GT.txt ...`
  *   is the same, the old imm-eval form);
  * - `slam-eval segmentation model_probabilities.csv motion_labels.txt [--exclude S] [--max-dt S]`:
