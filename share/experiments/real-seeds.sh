@@ -16,6 +16,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 source share/experiments/args.sh
+source share/experiments/references.sh
 mapfile -t SEEDS < <(seq 1 5)
 args_parse "$@"
 read -r -a CONFIGS <<< "${CONFIGS:-ini/imm7-shadow.ini ini/imm7.ini}"
@@ -37,15 +38,7 @@ stats() {  # VALUES... -> "median M mean A" (values that are - are left out)
 }
 
 VREF=${VISP_REF:-$DATA/visp_rbt/groundtruth.txt}
-if [ -n "${TESTSEQ_REF:-}" ]; then
-  TREF=$TESTSEQ_REF
-else
-  ref="$OUT/testseq_single_reference"
-  [ -s "$ref/trajectory_refined.txt" ] ||
-    "$APP" ini/single.ini "$DATA/monoslam_testseq" --out "$ref" --no-gui --quiet --set output.scene=false \
-      --set output.refine_trajectory=true > "$ref.log" 2>&1
-  TREF=$ref/trajectory_refined.txt
-fi
+TREF=$(testseq_reference "$OUT")
 
 for cfg in "${CONFIGS[@]}"; do
   for seq in visp_rbt monoslam_testseq; do

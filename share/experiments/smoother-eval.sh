@@ -18,6 +18,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 source share/experiments/args.sh
+source share/experiments/references.sh
 mapfile -t SEEDS < <(seq 101 120)
 args_parse "$@"
 CONFIG=${CONFIG:-ini/imm7-shadow.ini}
@@ -50,13 +51,7 @@ gt="${VISP_REF:-$DATA/visp_rbt/groundtruth.txt}"
 printf '%-22s %-24s %-24s %-24s %s\n' visp_rbt "$(ate "$o/trajectory.txt" "$gt")" \
   "$(ate "$o/trajectory_smoothed.txt" "$gt")" "$(ate "$o/trajectory_refined.txt" "$gt")" "$(timing "$o.log")"
 # monoslam_testseq against the refinement of an independent run (single model).
-if [ -n "${TESTSEQ_REF:-}" ]; then
-  r=$TESTSEQ_REF
-else
-  ref="$OUT/testseq_single_reference"
-  run ini/single.ini "$DATA/monoslam_testseq" "$ref"
-  r="$ref/trajectory_refined.txt"
-fi
+r=$(testseq_reference "$OUT")
 o="$OUT/testseq"
 run "$CONFIG" "$DATA/monoslam_testseq" "$o"
 printf '%-22s %-24s %-24s %-24s %s\n' monoslam_testseq "$(ate "$o/trajectory.txt" "$r")" \

@@ -135,13 +135,16 @@ void CShadowFilter::updateFeature(TShadowFeature& f, const Vec2& z)
   f.measured = true;
   f.missed = 0;
   ++f.nMeasured;
-  if (f.cls == EShadowClass::Pending && !f.restartViews)
-    f.track.addView(z);
-  else if (f.cls == EShadowClass::Pending && m_motion.measured)
+  if (f.cls == EShadowClass::Pending)
   {
-    // The first measurement after a frame without measured camera motion: the views start again here.
-    f.track.start(m_motion.frame, z);
-    f.restartViews = false;
+    if (!f.restartViews)
+      f.track.addView(z);
+    else if (m_motion.measured)
+    {
+      // The first measurement after a frame without measured camera motion: the views start again here.
+      f.track.start(m_motion.frame, z);
+      f.restartViews = false;
+    }
   }
   ++m_report.nMeasured;
 }
