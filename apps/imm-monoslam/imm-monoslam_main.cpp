@@ -1,5 +1,6 @@
 /* imm-monoslam — main program: a thin wrapper around immslam::app::CImmMonoSlamApp. */
 #include <immslam/app/CImmMonoSlamApp.h>
+#include <immslam/refine/bundle_adjust.h>
 
 #include <csignal>
 
@@ -14,6 +15,7 @@ extern "C" void onSigint(int)
 
 int main(int argc, char** argv)
 {
+  immslam::refine::quietSolverWarnings();  // the smoother's Ceres solves
   immslam::app::CImmMonoSlamApp app;
   const int st = app.initialize(argc, argv);
   if (st >= 0) return st;

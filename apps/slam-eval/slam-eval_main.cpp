@@ -1,6 +1,7 @@
 /* slam-eval: evaluation of imm-monoslam's outputs against ground truth (ATE/RPE, motion
  * segmentation, static/dynamic classification, track errors, NIS); see --help. */
 #include <immslam/evalapp/slam_eval_app.h>
+#include <immslam/refine/bundle_adjust.h>
 #include <immslam/sim/pixel_truth.h>
 
 #include <iostream>
@@ -8,6 +9,7 @@
 
 int main(int argc, char** argv)
 {
+  immslam::refine::quietSolverWarnings();  // `reprojection --refine` solves with Ceres
   namespace evalapp = immslam::evalapp;
   evalapp::TSlamEvalTruthSources truth;
   // Tracks on a rendered sequence: the truth at each tracked pixel is ray cast through the

@@ -166,3 +166,26 @@ TEST(RobustProcess, ExitStatusesOfTheProgram)
   EXPECT_EQ(status({src("ini/single.ini"), "--set", "slam.sigma_pixel=nan", "--out", d + "/out"}), 1);
   EXPECT_NE(test::readFile(d + "/log.stderr").find("[slam] sigma_pixel"), std::string::npos);
 }
+
+TEST(RobustProcess, SolverWarningsStayOffTheTerminal)
+{
+  // The paper's scenario with one model: some smoother windows hold points without parallax, on
+  // which Ceres logs a warning per rejected Levenberg-Marquardt step (refine::quietSolverWarnings).
+  const std::string d = freshDir("solver_warnings");
+  const std::vector<std::string> args{src("ini/single.ini"), "--set", "input.scenario=scenarios/paper.ini",
+                                      "--no-gui", "--quiet", "--out", d + "/out"};
+  const auto runAndReadStderr = [&](const std::string& log) {
+    CChild c(args, d + "/" + log);
+    EXPECT_TRUE(c.ok());
+    EXPECT_EQ(c.ok() ? c.wait() : -1, 0);
+    return test::readFile(d + "/" + log + ".stderr");
+  };
+  const std::string quiet = runAndReadStderr("quiet");
+  EXPECT_EQ(quiet.find("Linear solver failure"), std::string::npos) << quiet;
+  EXPECT_EQ(quiet.find("InitGoogleLogging"), std::string::npos) << quiet;
+  // Asked for (glog's own variable), they are there: the run above did meet them.
+  ::setenv("GLOG_minloglevel", "0", 1);
+  const std::string asked = runAndReadStderr("asked");
+  ::unsetenv("GLOG_minloglevel");
+  EXPECT_NE(asked.find("Linear solver failure"), std::string::npos);
+}

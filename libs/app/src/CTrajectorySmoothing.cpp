@@ -98,7 +98,8 @@ void CTrajectorySmoothing::finish(const std::string& path, const std::optional<c
   }
   std::ostringstream m;
   m << std::fixed << std::setprecision(2) << "trajectory_smoothed.txt: " << traj.size() << " poses, " << st.keyframes
-    << " keyframes, " << st.optimisations << " window optimisations; lag median " << summary.smoothMedianLagFrames
+    << " keyframes, " << st.optimisations << " window optimisations (" << st.unconverged
+    << " stopped before converging, their best step kept); lag median " << summary.smoothMedianLagFrames
     << " frames, max " << summary.smoothMaxLagFrames << "; smoother CPU " << st.cpuSeconds << " s ("
     << 100 * st.cpuSeconds / std::max(summary.wallSeconds, 1e-9) << " % of the run's wall time), " << wait
     << " s waited for it at the end";

@@ -361,11 +361,12 @@ void CKeyframeSmoother::optimiseWindow()
     bo.heldPoses.push_back(held);
     bo.scalePoses = {held, n - 1};
   }
-  bundleAdjust(p, bo);
+  const bool converged = bundleAdjust(p, bo).converged;
 
   {
     std::lock_guard<std::mutex> lk(m_mutex);
     ++m_stats.optimisations;
+    m_stats.unconverged += converged ? 0 : 1;
     m_optimisedOnce = true;
     for (std::size_t k = 0; k < n; ++k)
     {

@@ -3,10 +3,12 @@
 #include <immslam/refine/bundle_adjust.h>
 
 #include <ceres/ceres.h>
+#include <glog/logging.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <set>
 
@@ -250,4 +252,8 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
   return res;
 }
 
+void quietSolverWarnings()
+{
+  if (!std::getenv("GLOG_minloglevel")) FLAGS_minloglevel = google::GLOG_FATAL;
+}
 }  // namespace immslam::refine

@@ -58,6 +58,7 @@ struct TSmoothedKeyframe
 struct TSmootherStats
 {
   std::size_t frames = 0, keyframes = 0, optimisations = 0;
+  std::size_t unconverged = 0;     ///< window optimisations that stopped before a convergence tolerance (best step kept)
   std::vector<double> lagFrames;  ///< per optimised keyframe: frames given between its arrival and
                                   ///< its first optimised publication
   double cpuSeconds = 0;          ///< CPU time of the smoother's thread (or of its calls when synchronous)

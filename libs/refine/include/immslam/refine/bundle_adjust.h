@@ -63,5 +63,13 @@ struct TBundleResult
  * deterministic. */
 TBundleResult bundleAdjust(TBundleProblem& problem, const TBundleOptions& opts = {});
 
+/** For a program's main (a library never calls it): Ceres's log messages off. A window without
+ * parallax (a camera at rest or rotating) leaves points' depths unconstrained; Levenberg-Marquardt then
+ * logs a warning ("Linear solver failure ... dense Cholesky factorization") for each step it rejects
+ * and an error when it stops after too many. The solve keeps its best step (the cost never rises) and
+ * its outcome is in TBundleResult (the smoother counts the windows that did not converge, and the run
+ * reports them). GLOG_minloglevel, when set in the environment, decides instead (0: everything). */
+void quietSolverWarnings();
+
 
 }  // namespace immslam::refine
