@@ -15,7 +15,7 @@ extern "C" void onSigint(int)
 
 int main(int argc, char** argv)
 {
-  immslam::refine::quietSolverWarnings();  // the smoother's Ceres solves
+  immslam::refine::quietSolverLog();  // the smoother's Ceres solves
   immslam::app::CImmMonoSlamApp app;
   const int st = app.initialize(argc, argv);
   if (st >= 0) return st;

@@ -9,7 +9,7 @@
 
 int main(int argc, char** argv)
 {
-  immslam::refine::quietSolverWarnings();  // `reprojection --refine` solves with Ceres
+  immslam::refine::quietSolverLog();  // `reprojection --refine` solves with Ceres
   namespace evalapp = immslam::evalapp;
   evalapp::TSlamEvalTruthSources truth;
   // Tracks on a rendered sequence: the truth at each tracked pixel is ray cast through the

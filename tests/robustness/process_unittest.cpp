@@ -170,7 +170,7 @@ TEST(RobustProcess, ExitStatusesOfTheProgram)
 TEST(RobustProcess, SolverWarningsStayOffTheTerminal)
 {
   // The paper's scenario with one model: some smoother windows hold points without parallax, on
-  // which Ceres logs a warning per rejected Levenberg-Marquardt step (refine::quietSolverWarnings).
+  // which Ceres logs a warning per rejected Levenberg-Marquardt step (refine::quietSolverLog).
   const std::string d = freshDir("solver_warnings");
   const std::vector<std::string> args{src("ini/single.ini"), "--set", "input.scenario=scenarios/paper.ini",
                                       "--no-gui", "--quiet", "--out", d + "/out"};

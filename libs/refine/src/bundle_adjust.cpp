@@ -252,7 +252,7 @@ TBundleResult bundleAdjust(TBundleProblem& p, const TBundleOptions& opts)
   return res;
 }
 
-void quietSolverWarnings()
+void quietSolverLog()
 {
   if (!std::getenv("GLOG_minloglevel")) FLAGS_minloglevel = google::GLOG_FATAL;
 }

@@ -69,7 +69,6 @@ TBundleResult bundleAdjust(TBundleProblem& problem, const TBundleOptions& opts =
  * and an error when it stops after too many. The solve keeps its best step (the cost never rises) and
  * its outcome is in TBundleResult (the smoother counts the windows that did not converge, and the run
  * reports them). GLOG_minloglevel, when set in the environment, decides instead (0: everything). */
-void quietSolverWarnings();
-
+void quietSolverLog();
 
 }  // namespace immslam::refine
