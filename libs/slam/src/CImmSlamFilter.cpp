@@ -35,7 +35,64 @@ CImmSlamFilter::CImmSlamFilter(const TOptions& opts, const TIMMBankOptions& bank
   m_factors.resize(r);
   m_focal = 0.5 * (m_cam->fx() + m_cam->fy());
   m_sigmaPixel = m_opts.sigma_pixel;
+  const auto loosest = [&](motion::EMotionFamily family) {
+    int best = -1;
+    for (int i = 0; i < r; ++i)
+      if (m_models[i].family == family && (best < 0 || m_models[i].sigmaAngularPx > m_models[best].sigmaAngularPx))
+        best = i;
+    return best;
+  };
+  m_motionNoise.general = loosest(motion::EMotionFamily::General);
+  m_motionNoise.rotation = loosest(motion::EMotionFamily::Rotation);
   initialiseState();
+}
+
+motion::TMotionModel CImmSlamFilter::effectiveModel(int i) const
+{
+  motion::TMotionModel m = m_models[i];
+  const TMotionNoise& n = m_motionNoise;
+  if (!m_opts.adaptive_motion_noise || n.frames < m_opts.motion_noise_warmup || (i != n.general && i != n.rotation))
+    return m;
+  // Raised only by what the learned variance exceeds half again the model's own (a right model's
+  // estimate scatters about its variance: the paper's noise stays where the camera keeps to it), and
+  // at most to TOptions::max_motion_noise_factor times it.
+  const double own = m.sigmaAngularPx;
+  m.sigmaAngularPx = std::min(m_opts.max_motion_noise_factor * own,
+                              std::sqrt(std::max(own * own, n.angular2 - 0.5 * own * own)));
+  return m;
+}
+
+double CImmSlamFilter::loosestAngularNoisePx() const
+{
+  return m_motionNoise.general < 0 ? 0.0 : effectiveModel(m_motionNoise.general).sigmaAngularPx;
+}
+
+void CImmSlamFilter::learnMotionNoise()
+{
+  // Covariance matching of the state correction (Mehra 1972; Mohamed & Schwarz 1999, "Adaptive Kalman
+  // filtering for INS/GPS"): a mode's angular velocity correction dw = w+ - w- has E[dw dw^T] =
+  // P-_ww - P+_ww when its process noise is right. Where the camera accelerates more than the noise
+  // says and the frame measures the rotation well (K_w H_w ~ I), dw dw^T exceeds that drop by the
+  // missing noise: Q_true ~ dw dw^T - (P-_ww - P+_ww) + Q_used, per axis, in pixels (the
+  // dimensionless formulation), blended with exponential forgetting. Learned on the loosest general
+  // mode, whose correction shows the camera's accelerations best, in the frames that updated it: a
+  // bank whose loosest mode is dormant (a slow or still camera) learns nothing. Angular only: it is
+  // measured in the image without the map's scale, while the linear velocity is in the map's
+  // arbitrary unit, and movers that pull the translation would pass for accelerations.
+  TMotionNoise& n = m_motionNoise;
+  const int i = n.general;
+  if (!m_opts.adaptive_motion_noise || i < 0 || !n.primed || m_dormant[i]) return;
+  const auto& g = m_imm->mode(i);
+  const Vec3 dw = g.x.segment<3>(motion::kW) - n.wPred;
+  const double k = m_focal * m_focal / (n.dt * n.dt) / 3;  // per axis, px^2 per frame^2
+  const double drop = k * (n.PwwPred - g.P.block<3, 3>(motion::kW, motion::kW)).trace();
+  if (n.frames == 0) n.angular2 = n.usedAngular2;
+  ++n.frames;
+  // A frame whose angular velocity prior is wider than twice the process noise (the start, a
+  // relocalisation) tells the prior, not the noise.
+  if (drop >= 2 * n.usedAngular2) return;
+  const double a = m_opts.adaptive_noise_rate;
+  n.angular2 = (1 - a) * n.angular2 + a * (k * dw.squaredNorm() - drop + n.usedAngular2);
 }
 
 CImmSlamFilter::~CImmSlamFilter() = default;
@@ -107,7 +164,7 @@ double CImmSlamFilter::predict(double timestamp)
   m_imm->mix(m_pool.get(), dt, &lowerOnly);
   m_pool->parallelFor(0, r, [&](int i) {
     auto& g = m_imm->mode(i);
-    const auto inc = motion::motionIncrement(m_models[i], g.x.segment<3>(motion::kV), g.x.segment<3>(motion::kW), dt,
+    const auto inc = motion::motionIncrement(effectiveModel(i), g.x.segment<3>(motion::kV), g.x.segment<3>(motion::kW), dt,
                                              m_focal);
     TLazyMode& L = m_lazy[i];
     L.active = lazy[i];
@@ -131,6 +188,18 @@ double CImmSlamFilter::predict(double timestamp)
     m_xPred = m_imm->mode(0).x;
   else
     m_imm->combine(m_imm->predictedProbabilities(), m_xPred, nullptr);
+  // The loosest general mode's prediction, for learnMotionNoise (a lazy mode has no covariance yet).
+  TMotionNoise& n = m_motionNoise;
+  n.primed = m_opts.adaptive_motion_noise && n.general >= 0 && !m_lazy[n.general].active;
+  if (n.primed)
+  {
+    const auto& g = m_imm->mode(n.general);
+    n.wPred = g.x.segment<3>(motion::kW);
+    n.PwwPred = g.P.block<3, 3>(motion::kW, motion::kW);
+    const double used = effectiveModel(n.general).sigmaAngularPx;
+    n.usedAngular2 = used * used;
+    n.dt = dt;
+  }
   return dt;
 }
 
@@ -217,6 +286,7 @@ void CImmSlamFilter::correctPose(const Vec3& r_CW, const Vec4& q_CW, double sigm
                                  const Vec6& velocity, const Mat6& velocityCov)
 {
   const int r = m_imm->numModels();
+  m_motionNoise.primed = false;  // the velocities restart: this frame tells nothing of the noise
   m_pool->parallelFor(0, r, [&](int i) {
     materialize(i);
     applyPoseCorrection(m_imm->mode(i), m_features, r_CW, q_CW, sigmaT, sigmaTheta, velocity, velocityCov,

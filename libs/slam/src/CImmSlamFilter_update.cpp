@@ -187,6 +187,8 @@ void CImmSlamFilter::laterUpdate(const std::vector<TCandidate>& cands, const std
 CImmSlamFilter::TModeActivity CImmSlamFilter::finishUpdate()
 {
   if (m_imm->numModels() > 1) m_imm->updateProbabilities(m_logLik);
+  if (m_dormantDecided) learnMotionNoise();  // (a frame with an update)
+  m_motionNoise.primed = false;
   const TModeActivity act = settleDormantModes();
   refreshFused();
   return act;

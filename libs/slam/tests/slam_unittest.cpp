@@ -386,9 +386,19 @@ TEST(StateOps, QuaternionNormalization)
 namespace
 {
 /** One Monte Carlo run of the measurement-level simulation; returns the pose NEES per frame. */
+/** The camera's motion beyond the filter's model, for the adaptive motion noise: an angular sway of
+ * a 10-frame period on every axis with this RMS angular acceleration (px per frame^2), on top of the
+ * 0.1 px random walk; and what the filter learned. */
+struct TSway
+{
+  double accelPx = 0;
+  bool adaptive = true;      ///< [slam] adaptive_motion_noise
+  double* learnedPx = nullptr; ///< the loosest general model's angular noise at the end
+};
+
 std::vector<double> simulateRun(unsigned seed, int nFrames, const std::string& models, double rhoStd,
                                 double* rmsPos = nullptr, double dormantBelow = -1, int* nDormant = nullptr,
-                                bool lazy = true, double shakePx = 0)
+                                bool lazy = true, double shakePx = 0, const TSway& sway = TSway())
 {
   const auto cam = camera::makeCameraModel("pinhole", 320, 240, {200, 200, 160, 120});
   std::mt19937 rng(seed);
@@ -401,6 +411,7 @@ std::vector<double> simulateRun(unsigned seed, int nFrames, const std::string& m
   o.init_angular_velocity_std_px = 0.5;  // (slow rotation keeps the points in view for 100 frames)
   o.num_threads = 1;
   o.adaptive_pixel_noise = false;  // the simulated noise is known: 1 px
+  o.adaptive_motion_noise = sway.adaptive;
   o.convert_to_xyz = true;
   TIMMBankOptions b;
   b.models = models;
@@ -430,10 +441,14 @@ std::vector<double> simulateRun(unsigned seed, int nFrames, const std::string& m
   motion::TMotionModel truth{motion::EMotionFamily::General, 0.1, 0.1, ""};
   std::vector<double> nees;
   double se = 0;
+  constexpr double kPi = 3.14159265358979323846, kPeriod = 10;
+  const double swayAmp = sway.accelPx / f / (std::sqrt(2.0) * std::sin(kPi / kPeriod));  // RMS of its differences
+  const auto swayAt = [&](int k, int axis) { return swayAmp * std::sin(2 * kPi * k / kPeriod + 2.1 * axis); };
   for (int k = 1; k <= nFrames; ++k)
   {
     for (int i = 0; i < 3; ++i)
-      xv[7 + i] += truth.sigmaLinearPx / f * g(rng), xv[10 + i] += truth.sigmaAngularPx / f * g(rng);
+      xv[7 + i] += truth.sigmaLinearPx / f * g(rng),
+          xv[10 + i] += truth.sigmaAngularPx / f * g(rng) + swayAt(k, i) - swayAt(k - 1, i);
     xv = motion::predictCamera(truth, xv, 1.0, f);
     std::vector<std::pair<std::int64_t, Vec2>> z;
     for (int j = 0; j < 40; ++j)
@@ -459,6 +474,7 @@ std::vector<double> simulateRun(unsigned seed, int nFrames, const std::string& m
     se += e.head<3>().squaredNorm();
   }
   if (rmsPos) *rmsPos = std::sqrt(se / nFrames);
+  if (sway.learnedPx) *sway.learnedPx = slam.filter().loosestAngularNoisePx();
   return nees;
 }
 }  // namespace
@@ -514,6 +530,44 @@ TEST(Consistency, CameraPoseNeesInsideChiSquareBand)
   EXPECT_GT(mean, lo);
   EXPECT_GT(mean, 10.1);
   EXPECT_LT(mean, 14.6);
+}
+
+TEST(Consistency, AdaptiveMotionNoiseFollowsACameraThatAcceleratesMoreThanItsModel)
+{
+  // The camera sways at 2 px per frame^2 (RMS, every axis) while the filter's only model says 1 px:
+  // the learned angular noise rises towards the sway (less the half variance it must exceed), and the
+  // pose NEES (mean over 10 runs, frames 20-60) comes down towards its 6 dof.
+  double learnedAng = 0, neesOn = 0, neesOff = 0;
+  const int runs = 10, frames = 60;
+  for (int r = 0; r < runs; ++r)
+  {
+    double learned = 0;
+    const auto on = simulateRun(300 + r, frames, "general:1", 0.05, nullptr, -1, nullptr, true, 0,
+                                TSway{2.0, true, &learned});
+    const auto off = simulateRun(300 + r, frames, "general:1", 0.05, nullptr, -1, nullptr, true, 0, TSway{2.0, false});
+    learnedAng += learned / runs;
+    neesOn += std::accumulate(on.begin() + 20, on.end(), 0.0) / (frames - 20) / runs;
+    neesOff += std::accumulate(off.begin() + 20, off.end(), 0.0) / (frames - 20) / runs;
+  }
+  std::printf("sway 2 px, model 1 px: learned angular noise %.2f px; pose NEES %.2f (adaptive) / %.2f (fixed)\n",
+              learnedAng, neesOn, neesOff);
+  EXPECT_GT(learnedAng, 1.4);
+  EXPECT_LT(learnedAng, 2.3);
+  EXPECT_LT(neesOn, 0.8 * neesOff);
+  // Against a 0.5 px model the same sway is held at the bound, 3 times the model's own.
+  double bounded = 0;
+  simulateRun(300, frames, "general:0.5", 0.05, nullptr, -1, nullptr, true, 0, TSway{2.0, true, &bounded});
+  EXPECT_DOUBLE_EQ(bounded, 1.5);
+  // Where the camera keeps to its model (0.1 px against 0.5) nothing is learned: the model's own
+  // noise, and the same run to the last bit.
+  for (unsigned seed : {5u, 6u})
+  {
+    double learned = 0;
+    const auto a = simulateRun(seed, 60, "general:0.5", 0.05, nullptr, -1, nullptr, true, 0, TSway{0, true, &learned});
+    const auto b = simulateRun(seed, 60, "general:0.5", 0.05, nullptr, -1, nullptr, true, 0, TSway{0, false});
+    EXPECT_EQ(learned, 0.5);
+    EXPECT_EQ(a, b);
+  }
 }
 
 TEST(IMMSlam, IdenticalModelsGiveTheSingleFilter)

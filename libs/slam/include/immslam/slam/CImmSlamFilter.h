@@ -51,6 +51,11 @@ class CImmSlamFilter
     double adaptive_noise_rate = 0.05;          ///< weight of each frame's estimate (exponential forgetting)
     double min_sigma_pixel = 0.25;              ///< bounds of the adaptive estimate (px)
     double max_sigma_pixel = 3.0;
+    /** Raise the angular acceleration noise of the bank's loosest general and rotation models online
+     * when the camera's accelerations exceed it (learnMotionNoise; never below the model's own noise). */
+    bool adaptive_motion_noise = true;
+    int motion_noise_warmup = 10;               ///< frames learned from before the learned noise acts
+    double max_motion_noise_factor = 3.0;       ///< bound of the learned noise, times the model's own
     double init_rho = 1.0;                      ///< inverse-depth prior mean (dimensionless)
     double init_rho_std = 1.0;                  ///< inverse-depth prior std
     double init_linear_velocity_std_px = 5.0;   ///< initial v std (image px/frame at unit depth)
@@ -174,6 +179,9 @@ class CImmSlamFilter
   const TOptions& options() const { return m_opts; }
   /** Current measurement noise std (px). */
   double sigmaPixel() const { return m_sigmaPixel; }
+  /** Angular acceleration noise of the bank's loosest general model as the next prediction uses it
+   * (px; its own until the camera's accelerations exceed it; 0 without a general model). */
+  double loosestAngularNoisePx() const;
   /** Mean focal length (px): the scale of the dimensionless formulation. */
   double focal() const { return m_focal; }
   std::int64_t frame() const { return m_frame; }
@@ -246,5 +254,21 @@ class CImmSlamFilter
   std::vector<double> m_firstDeltas;
   double m_focal = 1;
   double m_sigmaPixel = 1;  ///< current measurement noise std (px)
+  /** The loosest models' angular acceleration noise learned online (TOptions::adaptive_motion_noise). */
+  struct TMotionNoise
+  {
+    int general = -1, rotation = -1;  ///< the loosest general and rotation modes (-1: none in the bank)
+    double angular2 = 0;              ///< learned angular acceleration variance (px^2 per frame^2)
+    int frames = 0;                   ///< frames learned from
+    bool primed = false;              ///< this frame's prediction of `general` is recorded below
+    Vec3 wPred = Vec3::Zero();        ///< its predicted angular velocity
+    Mat3 PwwPred = Mat3::Zero();      ///< and its predicted covariance
+    double usedAngular2 = 0, dt = 1;  ///< the noise and the interval of that prediction
+  };
+  /** Model i as predicted now: the loosest general and rotation models with the learned noise. */
+  motion::TMotionModel effectiveModel(int i) const;
+  /** Covariance matching of the loosest general mode's angular velocity correction of this frame. */
+  void learnMotionNoise();
+  TMotionNoise m_motionNoise;
 };
 }  // namespace immslam::slam

@@ -40,6 +40,8 @@ struct TFrameReport
   int nLowInnovation = 0, nRescued = 0, nHypotheses = 0;
   double meanSearchAreaPx2 = 0;  ///< mean of pi * 5.991 * sqrt(det S_i) over searched features
   double sigmaPixel = 0;         ///< measurement noise std used in this frame (px)
+  /** Angular acceleration noise of the loosest general model for the next frame (px). */
+  double motionNoiseAngularPx = 0;
   int nDepthKnown = 0;       ///< rho - 1.96 sigma_rho > 0, or XYZ
   int nAdded = 0, nDeleted = 0, nConverted = 0;
   double dtFrames = 1;       ///< elapsed time in nominal frame periods

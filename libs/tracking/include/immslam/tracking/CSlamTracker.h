@@ -50,6 +50,9 @@ class CSlamTracker
   {
     double sigma_pixel = 1.0;                   ///< image measurement noise (px); initial value if adaptive
     bool adaptive_pixel_noise = true;           ///< estimate the measurement noise online (CImmSlamFilter::adaptMeasurementNoise)
+    /** Raise the loosest models' angular acceleration noise when the camera turns more abruptly
+     * (CImmSlamFilter::learnMotionNoise). */
+    bool adaptive_motion_noise = true;
     // The fields below that are set to a k* constant are not configuration keys (internal constants,
     // CMonoSlamSystem::removedKeys()); the fields stay for tests and library users.
     static constexpr double kAdaptiveNoiseRate = 0.05;  ///< forgetting weight of the noise estimate (doc/estimator.md)
