@@ -44,6 +44,11 @@ CImmSlamFilter::CImmSlamFilter(const TOptions& opts, const TIMMBankOptions& bank
   };
   m_motionNoise.general = loosest(motion::EMotionFamily::General);
   m_motionNoise.rotation = loosest(motion::EMotionFamily::Rotation);
+  if (m_motionNoise.general >= 0)
+  {
+    const double own = m_models[m_motionNoise.general].sigmaAngularPx;
+    m_motionNoise.angular2 = own * own;  // learning starts from the model's own noise
+  }
   initialiseState();
 }
 
@@ -80,13 +85,11 @@ void CImmSlamFilter::learnMotionNoise()
   // measured in the image without the map's scale, while the linear velocity is in the map's
   // arbitrary unit, and movers that pull the translation would pass for accelerations.
   TMotionNoise& n = m_motionNoise;
-  const int i = n.general;
-  if (!m_opts.adaptive_motion_noise || i < 0 || !n.primed || m_dormant[i]) return;
-  const auto& g = m_imm->mode(i);
+  if (!n.primed || m_dormant[n.general]) return;  // (primed: adaptive, with a general mode predicted in full)
+  const auto& g = m_imm->mode(n.general);
   const Vec3 dw = g.x.segment<3>(motion::kW) - n.wPred;
   const double k = m_focal * m_focal / (n.dt * n.dt) / 3;  // per axis, px^2 per frame^2
   const double drop = k * (n.PwwPred - g.P.block<3, 3>(motion::kW, motion::kW)).trace();
-  if (n.frames == 0) n.angular2 = n.usedAngular2;
   ++n.frames;
   // A frame whose angular velocity prior is wider than twice the process noise (the start, a
   // relocalisation) tells the prior, not the noise.

@@ -385,7 +385,6 @@ TEST(StateOps, QuaternionNormalization)
 
 namespace
 {
-/** One Monte Carlo run of the measurement-level simulation; returns the pose NEES per frame. */
 /** The camera's motion beyond the filter's model, for the adaptive motion noise: an angular sway of
  * a 10-frame period on every axis with this RMS angular acceleration (px per frame^2), on top of the
  * 0.1 px random walk; and what the filter learned. */
@@ -396,6 +395,7 @@ struct TSway
   double* learnedPx = nullptr; ///< the loosest general model's angular noise at the end
 };
 
+/** One Monte Carlo run of the measurement-level simulation; returns the pose NEES per frame. */
 std::vector<double> simulateRun(unsigned seed, int nFrames, const std::string& models, double rhoStd,
                                 double* rmsPos = nullptr, double dormantBelow = -1, int* nDormant = nullptr,
                                 bool lazy = true, double shakePx = 0, const TSway& sway = TSway())
