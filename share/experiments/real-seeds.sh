@@ -2,8 +2,10 @@
 # The real sequences over RANSAC draws: each configuration run on visp_rbt and monoslam_testseq with
 # [slam] seed = 1..N (1-point RANSAC's draws; one run is one draw, and on the 99 frames of visp_rbt one
 # draw can lose the path), the ATE after Sim(3) of trajectory.txt and trajectory_smoothed.txt (% of the
-# scene's extent) per seed, their median and mean, and the shadow filter's decisions (every dynamic
-# decision is false on these static scenes).
+# scene's extent) per seed, their median and mean, the runs whose translation is reversed (the median
+# direction error of the 6-frame relative motions above 90 deg: the second solution of a mostly planar
+# scene, doc/experiments/imm-bank.md), and the shadow filter's decisions (every dynamic decision is
+# false on these static scenes).
 #   visp_rbt          against VISP_REF (default: its ground truth, the AprilTag poses);
 #   monoslam_testseq  against TESTSEQ_REF (default: the bundle adjustment of an independent run's
 #                     matches, ini/single.ini's trajectory_refined.txt, made here).
@@ -32,6 +34,10 @@ extent() {  # EST REF -> ATE % of extent, or - when the file is missing
   [ -s "$1" ] || { echo -; return; }
   "$EVAL" ate "$1" "$2" | awk '/ATE \/ extent/ { printf "%.2f", $(NF - 1) }'
 }
+reversed() {  # EST REF -> 1 if the median direction error of the 6-frame motions exceeds 90 deg, else 0
+  [ -s "$1" ] || { echo 0; return; }
+  "$EVAL" ate "$1" "$2" --rpe 6 | awk '/RPE direction/ { r = ($4 == "median" && $5 > 90) } END { print r + 0 }'
+}
 stats() {  # VALUES... -> "median M mean A" (values that are - are left out)
   printf '%s\n' "$@" | grep -v '^-$' | sort -g |
     awk '{ v[NR] = $1; s += $1 } END { if (NR) printf "median %.2f mean %.2f", (NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2), s / NR; else printf "-" }'
@@ -44,19 +50,21 @@ for cfg in "${CONFIGS[@]}"; do
   for seq in visp_rbt monoslam_testseq; do
     ref=$VREF
     [ "$seq" = monoslam_testseq ] && ref=$TREF
-    filt=() smo=() dyn=0 all=0
+    filt=() smo=() dyn=0 all=0 rev=0
     for s in "${SEEDS[@]}"; do
       o="$OUT/$(basename "$cfg" .ini)-$seq-$s"
       "$APP" "$cfg" "$DATA/$seq" --out "$o" --no-gui --quiet --set output.scene=false --set "slam.seed=$s" \
         "${EXTRA[@]}" > "$o.log" 2>&1 || true
       filt+=("$(extent "$o/trajectory.txt" "$ref")")
       smo+=("$(extent "$o/trajectory_smoothed.txt" "$ref")")
+      rev=$((rev + $(reversed "$o/trajectory.txt" "$ref")))
       if [ -s "$o/classifications.csv" ]; then
         dyn=$((dyn + $(awk -F, 'NR > 1 && $3 == "dynamic"' "$o/classifications.csv" | wc -l)))
         all=$((all + $(awk -F, 'NR > 1' "$o/classifications.csv" | wc -l)))
       fi
     done
-    printf '%-20s %-17s filter %s (%s) | smoothed %s (%s) | dynamic decisions %d of %d\n' "$(basename "$cfg")" "$seq" \
-      "${filt[*]}" "$(stats "${filt[@]}")" "${smo[*]}" "$(stats "${smo[@]}")" "$dyn" "$all"
+    printf '%-20s %-17s filter %s (%s) | smoothed %s (%s) | reversed %d of %d | dynamic decisions %d of %d\n' \
+      "$(basename "$cfg")" "$seq" "${filt[*]}" "$(stats "${filt[@]}")" "${smo[*]}" "$(stats "${smo[@]}")" \
+      "$rev" "${#SEEDS[@]}" "$dyn" "$all"
   done
 done
