@@ -30,13 +30,11 @@ for seq in visp_rbt monoslam_testseq; do
   [ -d "$DATA/$seq" ] || { echo "real-seeds: $DATA/$seq not found (--data)" >&2; exit 1; }
 done
 
-extent() {  # EST REF -> ATE % of extent, or - when the file is missing
-  [ -s "$1" ] || { echo -; return; }
-  "$EVAL" ate "$1" "$2" | awk '/ATE \/ extent/ { printf "%.2f", $(NF - 1) }'
-}
-reversed() {  # EST REF -> 1 if the median direction error of the 6-frame motions exceeds 90 deg, else 0
-  [ -s "$1" ] || { echo 0; return; }
-  "$EVAL" ate "$1" "$2" --rpe 6 | awk '/RPE direction/ { r = ($4 == "median" && $5 > 90) } END { print r + 0 }'
+score() {  # EST REF -> "EXTENT REVERSED": ATE % of extent (- when the file is missing) and 1 if the median
+           # direction error of the 6-frame motions exceeds 90 deg, else 0 (one evaluation)
+  [ -s "$1" ] || { echo "- 0"; return; }
+  "$EVAL" ate "$1" "$2" --rpe 6 | awk '/ATE \/ extent/ { e = sprintf("%.2f", $(NF - 1)) }
+    /RPE direction/ { r = ($4 == "median" && $5 > 90) } END { print (e == "" ? "-" : e), r + 0 }'
 }
 stats() {  # VALUES... -> "median M mean A" (values that are - are left out)
   printf '%s\n' "$@" | grep -v '^-$' | sort -g |
@@ -55,9 +53,11 @@ for cfg in "${CONFIGS[@]}"; do
       o="$OUT/$(basename "$cfg" .ini)-$seq-$s"
       "$APP" "$cfg" "$DATA/$seq" --out "$o" --no-gui --quiet --set output.scene=false --set "slam.seed=$s" \
         "${EXTRA[@]}" > "$o.log" 2>&1 || true
-      filt+=("$(extent "$o/trajectory.txt" "$ref")")
-      smo+=("$(extent "$o/trajectory_smoothed.txt" "$ref")")
-      rev=$((rev + $(reversed "$o/trajectory.txt" "$ref")))
+      read -r e r < <(score "$o/trajectory.txt" "$ref")
+      filt+=("$e")
+      rev=$((rev + r))
+      read -r e _ < <(score "$o/trajectory_smoothed.txt" "$ref")
+      smo+=("$e")
       if [ -s "$o/classifications.csv" ]; then
         dyn=$((dyn + $(awk -F, 'NR > 1 && $3 == "dynamic"' "$o/classifications.csv" | wc -l)))
         all=$((all + $(awk -F, 'NR > 1' "$o/classifications.csv" | wc -l)))
