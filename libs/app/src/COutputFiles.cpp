@@ -30,7 +30,7 @@ COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& sla
                                "expanded_search", "sigma_pixel", "shadow_ms", "n_promoted", "n_handed_over",
                                "n_new_shadow", "n_shadow_pending", "n_dynamic", "n_released", "n_dormant_modes", "n_lazy_modes", "lost_frames",
                                "relocalised", "reloc_matches", "reloc_inliers", "reloc_ms", "n_new_first_map",
-                               "motion_noise_px"});
+                               "motion_noise_px", "shake_px"});
   if (shadow)
   {
     m_classes = std::make_unique<io::CCsvWriter>(path("classifications.csv"),
@@ -76,7 +76,7 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
                      slam.models()[best].name, r.expandedSearch ? 1 : 0, r.sigmaPixel, fr.shadowMs, fr.promoted,
                      fr.handedOver, fr.newShadow, nPending, nDynamic, fr.released, r.nDormantModes, r.nLazyModes, r.lostFrames,
                      r.relocalised ? 1 : 0, r.nRelocMatches, r.nRelocInliers, r.tRelocMs, fr.newFirstMap,
-                     r.motionNoiseAngularPx});
+                     r.motionNoiseAngularPx, r.shakePx});
   if (fr.shadow && m_classes)
   {
     for (const auto& d : fr.shadow->decisions)

@@ -56,6 +56,12 @@ motion::TMotionModel CImmSlamFilter::effectiveModel(int i) const
 {
   motion::TMotionModel m = m_models[i];
   const TMotionNoise& n = m_motionNoise;
+  if (m_opts.adaptive_shake && n.shakeFrames >= m_opts.motion_noise_warmup && m.shakePx > 0)
+  {
+    // As the angular noise below: raised by what the learned variance exceeds half again the bank's.
+    const double own = m.shakePx;
+    m.shakePx = std::min(m_opts.max_shake_factor * own, std::sqrt(std::max(own * own, n.shake2 - 0.5 * own * own)));
+  }
   if (!m_opts.adaptive_motion_noise || n.frames < m_opts.motion_noise_warmup || (i != n.general && i != n.rotation))
     return m;
   // Raised only by what the learned variance exceeds half again the model's own (a right model's
@@ -65,6 +71,11 @@ motion::TMotionModel CImmSlamFilter::effectiveModel(int i) const
   m.sigmaAngularPx = std::min(m_opts.max_motion_noise_factor * own,
                               std::sqrt(std::max(own * own, n.angular2 - 0.5 * own * own)));
   return m;
+}
+
+double CImmSlamFilter::shakePx() const
+{
+  return m_models.empty() ? 0.0 : effectiveModel(0).shakePx;  // (every model has the same shake)
 }
 
 double CImmSlamFilter::loosestAngularNoisePx() const
@@ -194,6 +205,7 @@ double CImmSlamFilter::predict(double timestamp)
   // The loosest general mode's prediction, for learnMotionNoise (a lazy mode has no covariance yet).
   TMotionNoise& n = m_motionNoise;
   n.primed = m_opts.adaptive_motion_noise && n.general >= 0 && !m_lazy[n.general].active;
+  n.dt = dt;
   if (n.primed)
   {
     const auto& g = m_imm->mode(n.general);

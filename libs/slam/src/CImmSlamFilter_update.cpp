@@ -282,6 +282,7 @@ void CImmSlamFilter::adaptMeasurementNoise(const std::vector<TCandidate>& cands,
   // Post-fit residuals e = z - h(x+) of the inliers satisfy E[e e^T] = R - H P+ H^T (Myers & Tapley):
   // per pixel coordinate, sigma^2 ~ mean(|e|^2 + tr(H P+ H^T)) / 2. The frame's estimate is blended in
   // with exponential forgetting and kept within bounds.
+  learnShake(cands, inliers);
   if (!m_opts.adaptive_pixel_noise || inliers.size() < 5) return;
   double sum = 0;
   int n = 0;
@@ -300,5 +301,47 @@ void CImmSlamFilter::adaptMeasurementNoise(const std::vector<TCandidate>& cands,
   const double a = m_opts.adaptive_noise_rate;
   const double s2 = (1 - a) * m_sigmaPixel * m_sigmaPixel + a * var;
   m_sigmaPixel = std::clamp(std::sqrt(s2), m_opts.min_sigma_pixel, m_opts.max_sigma_pixel);
+}
+
+void CImmSlamFilter::learnShake(const std::vector<TCandidate>& cands, const std::vector<int>& inliers)
+{
+  // Covariance matching of the camera's shake (a rotation jitter after the motion, TIMMBankOptions::
+  // shake_px) on the innovations nu = z - h(x_hat) of the frame's inliers at the fused prediction, the
+  // innovation form of Mehra (1972) as learnMotionNoise's is the correction form. A shake moves every
+  // feature alike, so it is read from the median of the innovations (per image axis), which a minority
+  // of movers among the inliers cannot move; a feature's own errors (depth, pixel noise) are not
+  // common and average out in it. Without missing noise, E[|med nu|^2] / 2 is at most the median
+  // per-axis predicted spread tr(S - R) / 2 (the camera's share of it is common to every feature)
+  // plus the median's share of the pixel noise, pi/2 sigma^2 / n; what it exceeds, per frame, is shake
+  // the prediction lacks: q = |med nu|^2 / 2 - median tr(S - R) / 2 - pi sigma^2 / (2 n) + q_used,
+  // blended with the pixel noise's forgetting rate. Only a frame with at least 8 inliers speaks.
+  TMotionNoise& n = m_motionNoise;
+  if (!m_opts.adaptive_shake || inliers.size() < 8 || m_models.empty()) return;
+  const double own = m_models[0].shakePx;  // (the bank's shake_px, every model's)
+  if (!(own > 0)) return;
+  const int m = static_cast<int>(inliers.size());
+  std::vector<double> u(m), v(m), spread(m);
+  const double s2 = m_sigmaPixel * m_sigmaPixel;  // (the noise the frame's S were formed with)
+  for (int k = 0; k < m; ++k)
+  {
+    const TCandidate& c = cands[inliers[k]];
+    const Vec2 nu = c.z - c.h;
+    u[k] = nu.x();
+    v[k] = nu.y();
+    spread[k] = std::max(0.0, 0.5 * c.S.trace() - s2);
+  }
+  const auto median = [](std::vector<double>& a) {
+    std::nth_element(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(a.size() / 2), a.end());
+    return a[a.size() / 2];
+  };
+  const double mu = median(u), mv = median(v), common = median(spread);
+  const double used = shakePx();
+  if (n.shake2 < 0) n.shake2 = own * own;
+  constexpr double kHalfPi = 1.57079632679489662;
+  const double dt = std::max(n.dt, 1e-3);  // (the variance of a random walk per frame)
+  const double q = std::max(0.0, (0.5 * (mu * mu + mv * mv) - common - kHalfPi * s2 / m) / dt + used * used);
+  const double a = m_opts.adaptive_noise_rate;
+  n.shake2 = (1 - a) * n.shake2 + a * q;
+  ++n.shakeFrames;
 }
 }  // namespace immslam::slam

@@ -67,6 +67,7 @@ void CSlamTracker::endFrame(Clock::time_point t0)
   const auto& features = m_filter.features();
   m_report.nMap = static_cast<int>(features.size());
   m_report.motionNoiseAngularPx = m_filter.loosestAngularNoisePx();
+  m_report.shakePx = m_filter.shakePx();
   m_report.nDepthKnown = 0;
   for (const auto& f : features) m_report.nDepthKnown += m_filter.depthKnown(f) ? 1 : 0;
   m_report.timeMs = msSince(t0);

@@ -14,6 +14,7 @@ CImmSlamFilter::TOptions CSlamTracker::TOptions::filterOptions() const
   o.sigma_pixel = sigma_pixel;
   o.adaptive_pixel_noise = adaptive_pixel_noise;
   o.adaptive_motion_noise = adaptive_motion_noise;
+  o.adaptive_shake = adaptive_shake;
   o.adaptive_noise_rate = adaptive_noise_rate;
   o.min_sigma_pixel = min_sigma_pixel;
   o.max_sigma_pixel = max_sigma_pixel;

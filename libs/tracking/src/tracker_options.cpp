@@ -12,6 +12,7 @@ void CSlamTracker::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileB
   IMMSLAM_LOAD_DOUBLE(sigma_pixel);
   IMMSLAM_LOAD_BOOL(adaptive_pixel_noise);
   IMMSLAM_LOAD_BOOL(adaptive_motion_noise);
+  IMMSLAM_LOAD_BOOL(adaptive_shake);
   IMMSLAM_LOAD_DOUBLE(max_sigma_pixel);
   IMMSLAM_LOAD_DOUBLE(init_rho);
   IMMSLAM_LOAD_DOUBLE(init_rho_std);
@@ -36,6 +37,8 @@ void CSlamTracker::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, 
   MRPT_SAVE_CONFIG_VAR_COMMENT(adaptive_pixel_noise, "estimate the measurement noise online from post-fit residuals");
   MRPT_SAVE_CONFIG_VAR_COMMENT(adaptive_motion_noise,
                                "raise the loosest motion models' angular acceleration noise when the camera turns more abruptly");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(adaptive_shake,
+                               "raise the camera's angular shake above [imm] shake_px when the image shows more (median innovation)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(max_sigma_pixel, "upper bound of the adaptive noise (px)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(init_rho, "inverse-depth prior mean (dimensionless: 1 = unit depth)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(init_rho_std, "inverse-depth prior std (its 95% region must include rho = 0)");

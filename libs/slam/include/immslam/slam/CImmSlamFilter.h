@@ -55,6 +55,10 @@ class CImmSlamFilter
      * when the camera's accelerations exceed it (learnMotionNoise; never below the model's own noise). */
     bool adaptive_motion_noise = true;
     int motion_noise_warmup = 10;               ///< frames learned from before the learned noise acts
+    /** Learn the camera's angular shake online, from the median innovation of the inliers (learnShake;
+     * never below the bank's own shake_px; nothing is learned when that is 0). */
+    bool adaptive_shake = true;
+    double max_shake_factor = 10.0;             ///< bound of the learned shake, times the bank's shake_px
     double max_motion_noise_factor = 3.0;       ///< bound of the learned noise, times the model's own
     double init_rho = 1.0;                      ///< inverse-depth prior mean (dimensionless)
     double init_rho_std = 1.0;                  ///< inverse-depth prior std
@@ -182,6 +186,9 @@ class CImmSlamFilter
   /** Angular acceleration noise of the bank's loosest general model as the next prediction uses it
    * (px; its own until the camera's accelerations exceed it; 0 without a general model). */
   double loosestAngularNoisePx() const;
+  /** The angular shake (px per frame) the next prediction uses: the bank's shake_px, or the learned
+   * one where it exceeds it (TOptions::adaptive_shake). */
+  double shakePx() const;
   /** Mean focal length (px): the scale of the dimensionless formulation. */
   double focal() const { return m_focal; }
   std::int64_t frame() const { return m_frame; }
@@ -264,7 +271,11 @@ class CImmSlamFilter
     Vec3 wPred = Vec3::Zero();        ///< its predicted angular velocity
     Mat3 PwwPred = Mat3::Zero();      ///< and its predicted covariance
     double usedAngular2 = 0, dt = 1;  ///< the noise and the interval of that prediction
+    double shake2 = -1;               ///< learned shake variance (px^2 per frame; < 0: not yet)
+    int shakeFrames = 0;              ///< frames it was learned from
   };
+  /** Covariance matching of the camera's shake on the median innovation of the inliers (learnShake). */
+  void learnShake(const std::vector<TCandidate>& cands, const std::vector<int>& inliers);
   /** Model i as predicted now: the loosest general and rotation models with the learned noise. */
   motion::TMotionModel effectiveModel(int i) const;
   /** Covariance matching of the loosest general mode's angular velocity correction of this frame. */

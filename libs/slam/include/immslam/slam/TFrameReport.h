@@ -42,6 +42,7 @@ struct TFrameReport
   double sigmaPixel = 0;         ///< measurement noise std used in this frame (px)
   /** Angular acceleration noise of the loosest general model for the next frame (px). */
   double motionNoiseAngularPx = 0;
+  double shakePx = 0;  ///< the angular shake the next prediction uses (px per frame; CImmSlamFilter::shakePx)
   int nDepthKnown = 0;       ///< rho - 1.96 sigma_rho > 0, or XYZ
   int nAdded = 0, nDeleted = 0, nConverted = 0;
   double dtFrames = 1;       ///< elapsed time in nominal frame periods

@@ -53,6 +53,9 @@ class CSlamTracker
     /** Raise the loosest models' angular acceleration noise when the camera turns more abruptly
      * (CImmSlamFilter::learnMotionNoise). */
     bool adaptive_motion_noise = true;
+    /** Learn the camera's angular shake online from the median innovation of the inliers
+     * (CImmSlamFilter::learnShake; never below [imm] shake_px). */
+    bool adaptive_shake = true;
     // The fields below that are set to a k* constant are not configuration keys (internal constants,
     // CMonoSlamSystem::removedKeys()); the fields stay for tests and library users.
     static constexpr double kAdaptiveNoiseRate = 0.05;  ///< forgetting weight of the noise estimate (doc/estimator.md)
