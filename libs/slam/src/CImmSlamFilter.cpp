@@ -52,30 +52,34 @@ CImmSlamFilter::CImmSlamFilter(const TOptions& opts, const TIMMBankOptions& bank
   initialiseState();
 }
 
+namespace
+{
+/** A learned noise as it acts: raised only by what the learned variance exceeds half again the
+ * model's own (a right model's estimate scatters about its variance: the model's noise stays where
+ * the camera keeps to it), and at most to `maxFactor` times it. */
+double raisedNoise(double own, double learned2, double maxFactor)
+{
+  return std::min(maxFactor * own, std::sqrt(std::max(own * own, learned2 - 0.5 * own * own)));
+}
+}  // namespace
+
 motion::TMotionModel CImmSlamFilter::effectiveModel(int i) const
 {
   motion::TMotionModel m = m_models[i];
+  m.shakePx = shakePx();  // (every model has the bank's shake)
   const TMotionNoise& n = m_motionNoise;
-  if (m_opts.adaptive_shake && n.shakeFrames >= m_opts.motion_noise_warmup && m.shakePx > 0)
-  {
-    // As the angular noise below: raised by what the learned variance exceeds half again the bank's.
-    const double own = m.shakePx;
-    m.shakePx = std::min(m_opts.max_shake_factor * own, std::sqrt(std::max(own * own, n.shake2 - 0.5 * own * own)));
-  }
   if (!m_opts.adaptive_motion_noise || n.frames < m_opts.motion_noise_warmup || (i != n.general && i != n.rotation))
     return m;
-  // Raised only by what the learned variance exceeds half again the model's own (a right model's
-  // estimate scatters about its variance: the paper's noise stays where the camera keeps to it), and
-  // at most to TOptions::max_motion_noise_factor times it.
-  const double own = m.sigmaAngularPx;
-  m.sigmaAngularPx = std::min(m_opts.max_motion_noise_factor * own,
-                              std::sqrt(std::max(own * own, n.angular2 - 0.5 * own * own)));
+  m.sigmaAngularPx = raisedNoise(m.sigmaAngularPx, n.angular2, m_opts.max_motion_noise_factor);
   return m;
 }
 
 double CImmSlamFilter::shakePx() const
 {
-  return m_models.empty() ? 0.0 : effectiveModel(0).shakePx;  // (every model has the same shake)
+  const double own = m_models.empty() ? 0.0 : m_models[0].shakePx;  // (the bank's shake_px, every model's)
+  const TMotionNoise& n = m_motionNoise;
+  if (!m_opts.adaptive_shake || n.shakeFrames < m_opts.motion_noise_warmup || !(own > 0)) return own;
+  return raisedNoise(own, n.shake2, m_opts.max_shake_factor);
 }
 
 double CImmSlamFilter::loosestAngularNoisePx() const
@@ -205,7 +209,7 @@ double CImmSlamFilter::predict(double timestamp)
   // The loosest general mode's prediction, for learnMotionNoise (a lazy mode has no covariance yet).
   TMotionNoise& n = m_motionNoise;
   n.primed = m_opts.adaptive_motion_noise && n.general >= 0 && !m_lazy[n.general].active;
-  n.dt = dt;
+  n.dt = dt;  // (also learnShake's)
   if (n.primed)
   {
     const auto& g = m_imm->mode(n.general);
@@ -213,7 +217,6 @@ double CImmSlamFilter::predict(double timestamp)
     n.PwwPred = g.P.block<3, 3>(motion::kW, motion::kW);
     const double used = effectiveModel(n.general).sigmaAngularPx;
     n.usedAngular2 = used * used;
-    n.dt = dt;
   }
   return dt;
 }

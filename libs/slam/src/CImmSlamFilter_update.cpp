@@ -282,7 +282,6 @@ void CImmSlamFilter::adaptMeasurementNoise(const std::vector<TCandidate>& cands,
   // Post-fit residuals e = z - h(x+) of the inliers satisfy E[e e^T] = R - H P+ H^T (Myers & Tapley):
   // per pixel coordinate, sigma^2 ~ mean(|e|^2 + tr(H P+ H^T)) / 2. The frame's estimate is blended in
   // with exponential forgetting and kept within bounds.
-  learnShake(cands, inliers);
   if (!m_opts.adaptive_pixel_noise || inliers.size() < 5) return;
   double sum = 0;
   int n = 0;

@@ -201,6 +201,7 @@ void CSlamTracker::associateAndUpdate(std::vector<TCandidate>& cands)
   {
     std::vector<int> inliers = low;
     inliers.insert(inliers.end(), high.begin(), high.end());
+    m_filter.learnShake(cands, inliers);
     m_filter.adaptMeasurementNoise(cands, inliers);
   }
   updateLostState();

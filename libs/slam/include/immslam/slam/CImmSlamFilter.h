@@ -141,6 +141,10 @@ class CImmSlamFilter
   /** Adaptive pixel noise from the post-fit residuals of the inliers `inliers` of `cands` (Myers &
    * Tapley): blended into sigmaPixel() with TOptions::adaptive_noise_rate, within its bounds. */
   void adaptMeasurementNoise(const std::vector<TCandidate>& cands, const std::vector<int>& inliers);
+  /** The camera's shake learned from the median innovation of the inliers `inliers` of `cands` at the
+   * fused prediction (TOptions::adaptive_shake; shakePx()). Call before adaptMeasurementNoise: the
+   * candidates' S hold the pixel noise of this frame's prediction. */
+  void learnShake(const std::vector<TCandidate>& cands, const std::vector<int>& inliers);
 
   // ---- Map operations (every mode, each with its own linearisation) ----
   /** Undelayed inverse-depth initialisation of new features seen in the current frame, in every mode
@@ -274,8 +278,6 @@ class CImmSlamFilter
     double shake2 = -1;               ///< learned shake variance (px^2 per frame; < 0: not yet)
     int shakeFrames = 0;              ///< frames it was learned from
   };
-  /** Covariance matching of the camera's shake on the median innovation of the inliers (learnShake). */
-  void learnShake(const std::vector<TCandidate>& cands, const std::vector<int>& inliers);
   /** Model i as predicted now: the loosest general and rotation models with the learned noise. */
   motion::TMotionModel effectiveModel(int i) const;
   /** Covariance matching of the loosest general mode's angular velocity correction of this frame. */
