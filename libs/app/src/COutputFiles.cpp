@@ -10,7 +10,8 @@ namespace immslam::app
 {
 namespace fs = std::filesystem;
 
-COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& slam, bool shadow, bool searchLog)
+COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& slam, bool shadow, bool searchLog,
+                           bool relativePoses)
     : m_dir(dir)
 {
   std::error_code ec;
@@ -47,6 +48,14 @@ COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& sla
     m_searches = std::make_unique<io::CCsvWriter>(
         path("searches.csv"), std::vector<std::string>{"timestamp", "feature_id", "h_u", "h_v", "s_uu", "s_uv", "s_vv",
                                                        "found", "z_u", "z_v", "score", "status"});
+  if (relativePoses)
+  {
+    // The motion T_{C_j C_k} since the frame at from_timestamp and the upper triangle of its covariance.
+    std::vector<std::string> cols{"timestamp", "from_timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
+    for (int i = 0; i < 6; ++i)
+      for (int j = i; j < 6; ++j) cols.push_back("c" + std::to_string(i) + std::to_string(j));
+    m_relative = std::make_unique<io::CCsvWriter>(path("relative_poses.csv"), cols);
+  }
 }
 
 std::string COutputFiles::path(const std::string& name) const { return (fs::path(m_dir) / name).string(); }
@@ -111,6 +120,15 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
       m_searches->addCells({r.timestamp, s.id, s.h.x(), s.h.y(), s.S(0, 0), s.S(0, 1), s.S(1, 1), s.found ? 1 : 0,
                             s.z.x(), s.z.y(), s.score, kStatus[static_cast<int>(s.status)]});
     m_searches->flush();
+  }
+  if (m_relative && r.relFrom >= 0)
+  {
+    std::vector<io::CCsvCell> cells{r.timestamp, r.relFromTimestamp, r.relT.x(), r.relT.y(), r.relT.z(),
+                                             r.relQ[1], r.relQ[2], r.relQ[3], r.relQ[0]};
+    for (int i = 0; i < 6; ++i)
+      for (int j = i; j < 6; ++j) cells.emplace_back(r.relCov(i, j));
+    m_relative->addCells(cells);
+    m_relative->flush();
   }
 }
 

@@ -73,7 +73,7 @@ std::string formatSeconds(double s)
 }  // namespace
 
 CFilesSink::CFilesSink(const TRunContext& ctx, const TRunInputs& in, const system::CMonoSlamSystem& sys)
-    : m_files(ctx.args.outDir, sys.slam(), sys.shadowFilter() != nullptr, in.out.search_log)
+    : m_files(ctx.args.outDir, sys.slam(), sys.shadowFilter() != nullptr, in.out.search_log, in.out.relative_pose_lag > 0)
 {
 }
 

@@ -53,6 +53,8 @@ void TOutputOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, 
   IMMSLAM_LOAD_INT(overlay_every_n);
   IMMSLAM_LOAD_BOOL(overlay_video);
   IMMSLAM_LOAD_BOOL(search_log);
+  IMMSLAM_LOAD_INT(relative_pose_lag);
+  core::requireInRange(relative_pose_lag, 0, 100, s, "relative_pose_lag");
   IMMSLAM_LOAD_BOOL(refine_trajectory);
   IMMSLAM_LOAD_BOOL(smooth_trajectory);
   IMMSLAM_LOAD_INT(gui_scene_every_n);
@@ -70,6 +72,7 @@ void TOutputOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const st
   MRPT_SAVE_CONFIG_VAR_COMMENT(overlay_video, "also overlays.avi (MJPG)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(gui_scene_every_n, "live 3-D window refresh period (frames; windows need a display, no --no-gui)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(search_log, "write searches.csv (every active search of every frame)");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(relative_pose_lag, "write relative_poses.csv: the camera's motion over the last N frames with the filter's covariance (pose clones in the state; 0: none)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(refine_trajectory,
                                "at the end, bundle-adjust the run's own matches: trajectory_refined.txt (offline)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(smooth_trajectory,

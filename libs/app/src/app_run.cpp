@@ -84,7 +84,9 @@ std::unique_ptr<system::CMonoSlamSystem> buildSystem(const detail::TRunContext& 
 {
   try
   {
-    return std::make_unique<system::CMonoSlamSystem>(ctx.cfg, in.cam);
+    auto sys = std::make_unique<system::CMonoSlamSystem>(ctx.cfg, in.cam);
+    sys->slam().setRelativePoseLag(in.out.relative_pose_lag);
+    return sys;
   }
   catch (const std::exception& e)
   {

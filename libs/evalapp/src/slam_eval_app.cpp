@@ -6,6 +6,7 @@
 #include <immslam/evalapp/eval_app.h>
 #include <immslam/refine/bundle_adjust.h>
 #include <immslam/camera/CCameraModel.h>
+#include <immslam/eval/relative_nees.h>
 #include <immslam/eval/search_nis.h>
 #include <immslam/eval/segmentation.h>
 #include <immslam/evalapp/slam_eval_app.h>
@@ -152,6 +153,33 @@ std::string nisUsage(const std::string& prog)
          "NIS (z-h)^T S^-1 (z-h) of the matches used in the update (status inlier or rescued) of the\n"
          "app's searches.csv ([output] search_log = true): mean, mean per dof (1 for a consistent\n"
          "filter) and the fraction inside the chi-square(2) bound of probability C (default 0.95).\n";
+}
+
+std::string relativeNeesUsage(const std::string& prog)
+{
+  return "Usage: " + prog + " relative_poses.csv GT.txt [--est trajectory.txt] [--confidence C] [--max-dt S]\n"
+         "Consistency of the SLAM filter's relative poses: the NEES of every motion of the app's\n"
+         "relative_poses.csv ([output] relative_pose_lag = N) against the ground truth GT.txt (TUM,\n"
+         "T_world_camera): the rotation's (3 dof) and, with the run's trajectory for the map's scale\n"
+         "(its Sim(3) alignment onto GT.txt), the whole pose's (6 dof); mean, median and the fraction\n"
+         "inside the chi-square bound of probability C (default 0.95), each against a consistent\n"
+         "filter's. --max-dt: largest timestamp difference when joining the files (default 0.0001).\n";
+}
+
+int runRelativeNees(const std::string& prog, const std::vector<std::string>& args, std::ostream& out)
+{
+  const TParsed p = parse(args, 2, {"--est", "--confidence", "--max-dt"});
+  if (p.help) return out << relativeNeesUsage(prog), 0;
+  requirePositional(p, 2, "relative_poses.csv GT.txt");
+  const double conf = numberOr(p, "--confidence", 1e-9, 1 - 1e-9, 0.95);
+  const double maxDt = maxDtOption(p);
+  const auto rows = readRelativePosesCsv(p.positional[0]);
+  const core::TTrajectory gt = core::readTumTrajectory(p.positional[1]);
+  double scale = 0;
+  if (const auto est = p.value("--est")) scale = computeAte(core::readTumTrajectory(*est), gt, EAlignment::Sim3, maxDt).scale;
+  out << "relative poses : " << p.positional[0] << "\n"
+      << computeRelativeNees(rows, gt, scale, maxDt, conf).summary();
+  return 0;
 }
 
 int runSegmentation(const std::string& prog, const std::vector<std::string>& args, std::ostream& out)
@@ -344,6 +372,8 @@ std::string slamEvalAppUsage(const std::string& prog)
          "  " + prog + " tracks tracks.csv (points_groundtruth.txt | RENDERED_FOLDER) --est EST.txt [--gt GT.txt]\n"
          "      position error of the tracked moving points after the camera's Sim(3) alignment\n"
          "  " + prog + " nis searches.csv: NIS of the matches used in the update vs chi-square(2)\n"
+         "  " + prog + " relative-nees relative_poses.csv GT.txt [--est trajectory.txt]: NEES of the\n"
+         "      filter's relative poses (its consistency) against ground truth\n"
          "  " + prog + " reprojection searches.csv POSES.txt --calib calib.txt [--refine OUT.txt]\n"
          "      reprojection error of the SLAM's measurements given a trajectory; bundle adjustment\n"
          "  " + prog + " --help\n"
@@ -367,7 +397,7 @@ int runSlamEvalApp(const std::vector<std::string>& args, std::ostream& out, std:
     return 0;
   }
   if (cmd == "ate" || (cmd != "segmentation" && cmd != "classification" && cmd != "tracks" && cmd != "nis" &&
-                        cmd != "reprojection"))
+                        cmd != "reprojection" && cmd != "relative-nees"))
   {
     // ATE: the subcommand, or the old form (imm-eval) 'slam-eval EST.txt GT.txt ...'.
     std::vector<std::string> a{cmd == "ate" ? prog + " ate" : prog};
@@ -381,6 +411,7 @@ int runSlamEvalApp(const std::vector<std::string>& args, std::ostream& out, std:
     if (cmd == "classification") return runClassification(sub, args, out);
     if (cmd == "tracks") return runTracks(sub, args, out, truth);
     if (cmd == "reprojection") return runReprojection(sub, args, out);
+    if (cmd == "relative-nees") return runRelativeNees(sub, args, out);
     return runNis(sub, args, out);
   }
   catch (const TUsageError& e)
@@ -390,6 +421,7 @@ int runSlamEvalApp(const std::vector<std::string>& args, std::ostream& out, std:
             : cmd == "classification" ? classificationUsage(sub)
             : cmd == "tracks"         ? tracksUsage(sub)
             : cmd == "reprojection"   ? reprojectionUsage(sub)
+            : cmd == "relative-nees"  ? relativeNeesUsage(sub)
                                       : nisUsage(sub));
     return 2;
   }

@@ -127,6 +127,7 @@ void CImmSlamFilter::initialiseState()
   P.block<3, 3>(motion::kW, motion::kW) = Mat3::Identity() * sw * sw;
   m_imm->setAllModes(x, P);
   m_features.clear();
+  m_cloneFrames.clear();
   m_xFused = x;
   updateWorldPose();
 }
@@ -188,15 +189,15 @@ double CImmSlamFilter::predict(double timestamp)
     L.active = lazy[i];
     if (!L.active)
     {
-      predictRobocentric(g, m_features, inc, m_scratch[i], r > 1);  // (one model: not mixed, full)
+      predictRobocentric(g, m_features, inc, m_scratch[i], r > 1, numClones());  // (one model: not mixed, full)
       return;
     }
     // Dormant in the previous frame: likely dormant again. Mean and transition blocks only.
-    predictRobocentricMean(g, m_features, inc, L.blocks);
+    predictRobocentricMean(g, m_features, inc, L.blocks, numClones());
     if (inc.shakeCov.isZero())
       L.shake.resize(0, 0);
     else
-      L.shake = shakeFactor(g, m_features, inc.shakeCov);
+      L.shake = shakeFactor(g, m_features, inc.shakeCov, numClones());
     L.blockAt.assign(g.x.size(), -1);
     for (int b = 0; b < static_cast<int>(L.blocks.size()); ++b) L.blockAt[L.blocks[b].off] = b;
   });
@@ -308,7 +309,7 @@ void CImmSlamFilter::correctPose(const Vec3& r_CW, const Vec4& q_CW, double sigm
   m_pool->parallelFor(0, r, [&](int i) {
     materialize(i);
     applyPoseCorrection(m_imm->mode(i), m_features, r_CW, q_CW, sigmaT, sigmaTheta, velocity, velocityCov,
-                        m_scratch[i]);
+                        m_scratch[i], numClones());
   });
   if (r == 1)
     m_xPred = m_imm->mode(0).x;

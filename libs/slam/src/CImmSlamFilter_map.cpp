@@ -49,9 +49,9 @@ std::vector<std::int64_t> CImmSlamFilter::addFeatures(const std::vector<TNewFeat
 void CImmSlamFilter::removeFeatures(const std::vector<std::int64_t>& ids)
 {
   const std::unordered_set<std::int64_t> del(ids.begin(), ids.end());
-  std::vector<TReparamSegment> segs{TReparamSegment{0, motion::kCamDim, true, {}, {}}};
+  std::vector<TReparamSegment> segs{TReparamSegment{0, headDim(), true, {}, {}}};
   std::vector<TFeature> kept;
-  int off = motion::kCamDim;
+  int off = headDim();
   for (auto& f : m_features)
   {
     if (del.count(f.id)) continue;
@@ -64,6 +64,109 @@ void CImmSlamFilter::removeFeatures(const std::vector<std::int64_t>& ids)
   m_pool->parallelFor(0, m_imm->numModels(), [&](int i) { reparametrize(m_imm->mode(i), segs); });
   m_features = std::move(kept);
   refreshFused();
+}
+
+void CImmSlamFilter::clonePose(const std::function<bool(std::int64_t)>& keep, int maxClones)
+{
+  if (maxClones <= 0) return;
+  // Slots no longer wanted are free; the new clone takes one in place (O(n) per mode), a new slot
+  // while there are fewer than maxClones (the state grows once), else the oldest clone's.
+  int slot = -1;
+  for (int c = 0; c < numClones(); ++c)
+  {
+    auto& f = m_cloneFrames[static_cast<std::size_t>(c)];
+    if (f >= 0 && !keep(f)) f = -1;
+    if (f < 0 && slot < 0) slot = c;
+  }
+  if (slot < 0 && numClones() >= maxClones)
+    slot = static_cast<int>(std::min_element(m_cloneFrames.begin(), m_cloneFrames.end()) - m_cloneFrames.begin());
+  if (slot < 0)
+  {
+    // A new slot at the end of the clone blocks, before the features.
+    const int head = headDim();
+    const int n = static_cast<int>(m_imm->mode(0).x.size());
+    TReparamSegment clone{0, 1, false, VecX::Zero(kPoseCloneDim), MatX::Zero(kPoseCloneDim, 1)};
+    clone.newValue[3] = 1.0;
+    std::vector<TReparamSegment> segs{TReparamSegment{0, head, true, {}, {}}, clone};
+    if (n > head) segs.push_back(TReparamSegment{head, n - head, true, {}, {}});
+    m_pool->parallelFor(0, m_imm->numModels(), [&](int i) {
+      materialize(i);
+      reparametrize(m_imm->mode(i), segs);
+    });
+    for (auto& f : m_features) f.offset += kPoseCloneDim;
+    m_cloneFrames.push_back(m_frame);
+  }
+  else
+  {
+    // T_C_C = identity, exactly: no covariance, no correlation.
+    const int off = poseCloneOffset(slot);
+    m_pool->parallelFor(0, m_imm->numModels(), [&](int i) {
+      materialize(i);
+      auto& g = m_imm->mode(i);
+      g.x.segment<kPoseCloneDim>(off) << 0, 0, 0, 1, 0, 0, 0;
+      g.P.middleRows<kPoseCloneDim>(off).setZero();
+      g.P.middleCols<kPoseCloneDim>(off).setZero();
+    });
+    m_cloneFrames[static_cast<std::size_t>(slot)] = m_frame;
+  }
+  refreshFused();
+}
+
+CImmSlamFilter::TPoseClones CImmSlamFilter::poseClones() const
+{
+  TPoseClones out;
+  std::vector<int> slots;
+  for (int c = 0; c < numClones(); ++c)
+    if (m_cloneFrames[static_cast<std::size_t>(c)] >= 0) slots.push_back(c);
+  std::sort(slots.begin(), slots.end(), [this](int a, int b) {
+    return m_cloneFrames[static_cast<std::size_t>(a)] < m_cloneFrames[static_cast<std::size_t>(b)];
+  });
+  const int nc = static_cast<int>(slots.size());
+  if (nc == 0) return out;
+  const MatX P = fusedCovarianceBlock(poseCloneOffset(0), kPoseCloneDim * numClones());
+  // [dr; dtheta] with R = R_hat Exp(dtheta): dtheta = 2 vec(conj(q_hat) (x) q) (as cameraPoseCovariance).
+  MatX J = MatX::Zero(6 * nc, kPoseCloneDim * numClones());
+  for (int k = 0; k < nc; ++k)
+  {
+    const int c = slots[static_cast<std::size_t>(k)];
+    const int off = poseCloneOffset(c);
+    out.frames.push_back(m_cloneFrames[static_cast<std::size_t>(c)]);
+    out.r.push_back(m_xFused.segment<3>(off));
+    const Vec4 q = m_xFused.segment<4>(off + 3).normalized();
+    out.q.push_back(q);
+    Mat4 L;
+    math::quatMultiply(math::quatConjugate(q), q, nullptr, &L);
+    J.block<3, 3>(6 * k, kPoseCloneDim * c).setIdentity();
+    J.block<3, 4>(6 * k + 3, kPoseCloneDim * c + 3) = 2.0 * L.bottomRows<3>();
+  }
+  out.cov = J * P * J.transpose();
+  out.cov = (0.5 * (out.cov + out.cov.transpose())).eval();
+  return out;
+}
+
+bool CImmSlamFilter::relativePose(std::int64_t frame, Vec3& t, Vec4& q, Mat6& cov) const
+{
+  const auto it = std::find(m_cloneFrames.begin(), m_cloneFrames.end(), frame);
+  if (frame < 0 || it == m_cloneFrames.end()) return false;
+  const int off = poseCloneOffset(static_cast<int>(it - m_cloneFrames.begin()));
+  const Vec4 qc = m_xFused.segment<4>(off + 3).normalized();
+  const Mat3 R = math::quatToRotation(qc);
+  q = math::quatConjugate(qc);
+  t = -(R.transpose() * m_xFused.segment<3>(off));
+  // The clone's [b; a] (b = dr, a = 2 vec(conj(q_hat) (x) q)), then the inversion (chain rule).
+  Mat4 L;
+  math::quatMultiply(math::quatConjugate(qc), qc, nullptr, &L);
+  Eigen::Matrix<double, 6, 7> Jc = Eigen::Matrix<double, 6, 7>::Zero();
+  Jc.topLeftCorner<3, 3>().setIdentity();
+  Jc.bottomRightCorner<3, 4>() = 2.0 * L.bottomRows<3>();
+  Mat6 Ji = Mat6::Zero();
+  Ji.topLeftCorner<3, 3>() = -R.transpose();
+  Ji.topRightCorner<3, 3>() = math::skew(t);
+  Ji.bottomRightCorner<3, 3>() = -R;
+  const Eigen::Matrix<double, 6, 7> J = Ji * Jc;
+  cov = J * fusedCovarianceBlock(off, kPoseCloneDim) * J.transpose();
+  cov = (0.5 * (cov + cov.transpose())).eval();
+  return true;
 }
 
 double CImmSlamFilter::linearityIndex(const TFeature& f) const
@@ -79,7 +182,7 @@ void CImmSlamFilter::reparametrizeMap(const std::vector<char>& drop, const std::
   m_pool->parallelFor(0, m_imm->numModels(), [&](int i) {
     auto& g = m_imm->mode(i);
     std::vector<TReparamSegment> segs;
-    int runStart = 0, runLen = motion::kCamDim;
+    int runStart = 0, runLen = headDim();
     auto flush = [&] {
       if (runLen > 0) segs.push_back(TReparamSegment{runStart, runLen, true, {}, {}});
       runLen = 0;
@@ -108,7 +211,7 @@ void CImmSlamFilter::reparametrizeMap(const std::vector<char>& drop, const std::
   });
   std::vector<TFeature> kept;
   kept.reserve(m_features.size());
-  int off = motion::kCamDim;
+  int off = headDim();
   for (std::size_t k = 0; k < m_features.size(); ++k)
   {
     if (drop[k]) continue;

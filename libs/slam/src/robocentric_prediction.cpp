@@ -57,20 +57,23 @@ void columnBlock(const TBlockJac& b, const std::vector<TBlockJac>& blocks, const
  * applied at the identity increment to the state g (the world pose and every feature are
  * re-expressed through the jitter rotation). */
 MatX cameraJitterFactor(const bayes::TGaussian& g, const std::vector<TFeature>& features, const Mat6& noiseCov,
-                        const motion::Mat36u& J_t_n, const motion::Mat46u& J_dq_n)
+                        const motion::Mat36u& J_t_n, const motion::Mat46u& J_dq_n, int nClones)
 {
   const Eigen::Index n = g.x.size();
   MatX B = MatX::Zero(n, 6);
   const Vec3 t0 = Vec3::Zero();
   const Vec4 dq0(1, 0, 0, 0);
+  // The world pose and every pose clone are re-expressed alike (T_C'X = T_C'C T_CX).
+  for (int c = -1; c < nClones; ++c)
   {
+    const int off = c < 0 ? 0 : poseCloneOffset(c);
     Mat3 J_t;
     Mat34 J_dq;
-    features::transformPoint(g.x.segment<3>(0), dq0, t0, nullptr, &J_t, &J_dq);
+    features::transformPoint(g.x.segment<3>(off), dq0, t0, nullptr, &J_t, &J_dq);
     Mat4 J_cq;
-    math::quatMultiply(dq0, g.x.segment<4>(3), &J_cq, nullptr);
-    B.topRows<3>() = J_t * J_t_n + J_dq * J_dq_n;
-    B.middleRows<4>(3) = J_cq * Vec4(1, -1, -1, -1).asDiagonal() * J_dq_n;
+    math::quatMultiply(dq0, g.x.segment<4>(off + 3), &J_cq, nullptr);
+    B.middleRows<3>(off) = J_t * J_t_n + J_dq * J_dq_n;
+    B.middleRows<4>(off + 3) = J_cq * Vec4(1, -1, -1, -1).asDiagonal() * J_dq_n;
   }
   for (const auto& f : features)
   {
@@ -100,18 +103,18 @@ void addCovarianceFactor(MatX& P, const MatX& F)
   P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
 }
 
-MatX shakeFactor(const bayes::TGaussian& g, const std::vector<TFeature>& features, const Mat3& shakeCov)
+MatX shakeFactor(const bayes::TGaussian& g, const std::vector<TFeature>& features, const Mat3& shakeCov, int nClones)
 {
   // The shake is a rotation exp(s) of the camera after the motion: d exp(s)/ds = 0.5 [0; I] at s = 0.
   Mat6 N = Mat6::Zero();
   N.bottomRightCorner<3, 3>() = shakeCov;
   motion::Mat46u J_dq_n = motion::Mat46u::Zero();
   J_dq_n.block<3, 3>(1, 3) = 0.5 * Mat3::Identity();
-  return cameraJitterFactor(g, features, N, motion::Mat36u::Zero(), J_dq_n).rightCols<3>();
+  return cameraJitterFactor(g, features, N, motion::Mat36u::Zero(), J_dq_n, nClones).rightCols<3>();
 }
 
 void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& features,
-                        const motion::TMotionIncrement& inc, MatX& scratch, bool lowerInput)
+                        const motion::TMotionIncrement& inc, MatX& scratch, bool lowerInput, int nClones)
 {
   if (inc.identity)
   {
@@ -124,19 +127,19 @@ void predictRobocentric(bayes::TGaussian& g, const std::vector<TFeature>& featur
       if (lowerInput) g.P.triangularView<Eigen::StrictlyUpper>() = g.P.transpose();
       return;
     }
-    addCovarianceFactor(g.P, cameraJitterFactor(g, features, inc.noiseCov, inc.J_t_n, inc.J_dq_n));
+    addCovarianceFactor(g.P, cameraJitterFactor(g, features, inc.noiseCov, inc.J_t_n, inc.J_dq_n, nClones));
     return;
   }
-  if (lowerInput) mirrorTransitionInputs(g.P, features);
+  if (lowerInput) mirrorTransitionInputs(g.P, features, nClones);
   thread_local std::vector<TTransitionBlock> blocks;
-  predictRobocentricMean(g, features, inc, blocks);
+  predictRobocentricMean(g, features, inc, blocks, nClones);
   // With a shake, its rank update reads the lower triangle only and mirrors once for both.
   const bool shake = !inc.shakeCov.isZero();
   applyRobocentricTransition(g.P, blocks, scratch, !shake);
-  if (shake) addCovarianceFactor(g.P, shakeFactor(g, features, inc.shakeCov));
+  if (shake) addCovarianceFactor(g.P, shakeFactor(g, features, inc.shakeCov, nClones));
 }
 
-void mirrorTransitionInputs(MatX& P, const std::vector<TFeature>& features)
+void mirrorTransitionInputs(MatX& P, const std::vector<TFeature>& features, int nClones)
 {
   const Eigen::Index n = P.rows();
   const auto diagonalBlock = [&P](Eigen::Index off, Eigen::Index len) {
@@ -147,12 +150,13 @@ void mirrorTransitionInputs(MatX& P, const std::vector<TFeature>& features)
   diagonalBlock(kU, 6);
   P.block<7, 6>(0, kU) = P.block<6, 7>(kU, 0).transpose();
   if (n > kU + 6) P.block(kU, kU + 6, 6, n - kU - 6) = P.block(kU + 6, kU, n - kU - 6, 6).transpose();
+  for (int c = 0; c < nClones; ++c) diagonalBlock(poseCloneOffset(c), kPoseCloneDim);
   for (const auto& f : features) diagonalBlock(f.offset, f.dim());
 }
 
 void applyPoseCorrection(bayes::TGaussian& g, const std::vector<TFeature>& features, const Vec3& r_CW_new,
                          const Vec4& q_CW_new, double sigmaT, double sigmaTheta, const Vec6& velocity,
-                         const Mat6& velocityCov, MatX& scratch)
+                         const Mat6& velocityCov, MatX& scratch, int nClones)
 {
   const Vec3 r = g.x.segment<3>(0);
   const Vec4 q = g.x.segment<4>(3);
@@ -173,40 +177,41 @@ void applyPoseCorrection(bayes::TGaussian& g, const std::vector<TFeature>& featu
   g.x.segment<6>(kU).setZero();
   g.P.middleRows<6>(kU).setZero();
   g.P.middleCols<6>(kU).setZero();
-  predictRobocentric(g, features, inc, scratch);
+  predictRobocentric(g, features, inc, scratch, false, nClones);  // (the clones keep their world poses)
   g.x.segment<4>(3).normalize();
   g.x.segment<6>(kU) = velocity;
   g.P.block<6, 6>(kU, kU) = velocityCov;
 }
 
 void predictRobocentricMean(bayes::TGaussian& g, const std::vector<TFeature>& features,
-                            const motion::TMotionIncrement& inc, std::vector<TTransitionBlock>& blocks)
+                            const motion::TMotionIncrement& inc, std::vector<TTransitionBlock>& blocks, int nClones)
 {
   const Vec3& t = inc.t;
   const Vec4& dq = inc.dq;
   blocks.clear();
-  blocks.reserve(features.size() + 2);
+  blocks.reserve(features.size() + 2 + static_cast<std::size_t>(nClones));
 
-  // World pose T_C_W: r' = R(dq)^T (r - t), q' = conj(dq) (x) q.
-  {
+  // A pose T_C_X (the world's, a clone's): r' = R(dq)^T (r - t), q' = conj(dq) (x) q.
+  const auto poseBlock = [&](int off) {
     TBlockJac b;
-    b.off = 0;
+    b.off = off;
     b.len = 7;
     b.D.setZero();
     Mat3 J_p, J_t;
     Mat34 J_dq;
-    const Vec3 r2 = features::transformPoint(g.x.segment<3>(0), dq, t, &J_p, &J_t, &J_dq);
+    const Vec3 r2 = features::transformPoint(g.x.segment<3>(off), dq, t, &J_p, &J_t, &J_dq);
     Mat4 J_cq, J_q;
-    const Vec4 q2 = math::quatMultiply(math::quatConjugate(dq), g.x.segment<4>(3), &J_cq, &J_q);
+    const Vec4 q2 = math::quatMultiply(math::quatConjugate(dq), g.x.segment<4>(off + 3), &J_cq, &J_q);
     b.D.topLeftCorner<3, 3>() = J_p;
     b.D.bottomRightCorner<4, 4>() = J_q;
     // Chain rule through the increment: d/du = d/dt dt/du + d/d(dq) d(dq)/du.
     b.G.topRows<3>() = J_t * inc.J_t_u + J_dq * inc.J_dq_u;
     b.G.bottomRows<4>() = J_cq * Vec4(1, -1, -1, -1).asDiagonal() * inc.J_dq_u;
-    g.x.segment<3>(0) = r2;
-    g.x.segment<4>(3) = q2;
+    g.x.segment<3>(off) = r2;
+    g.x.segment<4>(off + 3) = q2;
     blocks.push_back(b);
-  }
+  };
+  poseBlock(0);
   // Velocities.
   {
     TBlockJac b;
@@ -216,6 +221,7 @@ void predictRobocentricMean(bayes::TGaussian& g, const std::vector<TFeature>& fe
     b.D.topLeftCorner<6, 6>() = inc.J_uNext_u;
     blocks.push_back(b);
   }
+  for (int c = 0; c < nClones; ++c) poseBlock(poseCloneOffset(c));
   // Features.
   for (const auto& f : features)
   {

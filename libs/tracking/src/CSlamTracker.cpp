@@ -70,6 +70,21 @@ void CSlamTracker::endFrame(Clock::time_point t0)
   m_report.shakePx = m_filter.shakePx();
   m_report.nDepthKnown = 0;
   for (const auto& f : features) m_report.nDepthKnown += m_filter.depthKnown(f) ? 1 : 0;
+  if (m_relativeLag > 0)
+  {
+    // The motion since frame k - lag from its clone, then the clone of this frame in its place.
+    const std::int64_t k = m_report.frame, j = k - m_relativeLag;
+    for (const auto& [frame, time] : m_clonedTimes)
+      if (frame == j && m_filter.relativePose(j, m_report.relT, m_report.relQ, m_report.relCov))
+      {
+        m_report.relFrom = j;
+        m_report.relFromTimestamp = time;
+      }
+    const int lag = m_relativeLag;
+    m_filter.clonePose([k, lag](std::int64_t f) { return k - f < lag; }, lag);
+    m_clonedTimes.emplace_back(k, m_report.timestamp);
+    if (static_cast<int>(m_clonedTimes.size()) > lag) m_clonedTimes.erase(m_clonedTimes.begin());
+  }
   m_report.timeMs = msSince(t0);
 }
 

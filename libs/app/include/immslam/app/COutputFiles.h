@@ -18,8 +18,10 @@ class COutputFiles
  public:
   /** Creates the folder and the per-frame files (existing files are overwritten).
    * \throws std::runtime_error naming the path that cannot be created. */
-  /** \param shadow also classifications.csv and tracks.csv (shadow filter on). */
-  COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& slam, bool shadow, bool searchLog = false);
+  /** \param shadow also classifications.csv and tracks.csv (shadow filter on).
+   * \param relativePoses also relative_poses.csv ([output] relative_pose_lag). */
+  COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& slam, bool shadow, bool searchLog = false,
+               bool relativePoses = false);
 
   /** Appends one processed frame to trajectory.txt, model_probabilities.csv and frame_stats.csv. */
   void addFrame(const system::TSystemFrame& fr, const slam::CMonoSlamIMM& slam);
@@ -33,7 +35,7 @@ class COutputFiles
  private:
   std::string m_dir;
   std::ofstream m_trajFile;
-  std::unique_ptr<io::CCsvWriter> m_probs, m_stats, m_searches, m_classes, m_tracks, m_shadowLog;
+  std::unique_ptr<io::CCsvWriter> m_probs, m_stats, m_searches, m_classes, m_tracks, m_shadowLog, m_relative;
   core::TTrajectory m_traj;
 };
 }  // namespace immslam::app

@@ -65,6 +65,10 @@ struct TOutputOptions : public mrpt::config::CLoadableOptions
   bool overlay_video = false;  ///< also overlays.avi
   int gui_scene_every_n = 10;  ///< live 3-D window refresh period (frames), when windows are open
   bool search_log = false;  ///< searches.csv (and shadow_log.csv): every search / shadow feature of every frame
+  /** relative_poses.csv: every frame, the camera's motion over the last N frames with the SLAM filter's
+   * covariance, from pose clones in the state (CSlamTracker::setRelativePoseLag): slam-eval
+   * relative-nees checks it against ground truth. 0: none. */
+  int relative_pose_lag = 0;
   bool refine_trajectory = false;  ///< trajectory_refined.txt: a bundle adjustment of the run's own matches at the end
   bool smooth_trajectory = true;  ///< trajectory_smoothed.txt: the online keyframe smoother (its own thread)
 

@@ -58,5 +58,13 @@ struct TFrameReport
   int nRelocInliers = 0;     ///< PnP inliers of the relocalisation attempt (0: none tried or failed early)
   double tRelocMs = 0;       ///< time of the relocalisation attempt (ms)
   std::vector<TSearchRecord> searches;
+  /** The camera's motion since frame relFrom (CSlamTracker::setRelativePoseLag): the relative pose
+   * T_{C_j C_k} (p_Cj = R(relQ) p_Ck + relT, the map's units) from the pose clone of frame j, with the
+   * filter's covariance relCov of [dt; dtheta] (t = t_hat + dt, R = R_hat Exp(dtheta)); relFrom < 0: none. */
+  std::int64_t relFrom = -1;
+  double relFromTimestamp = 0;
+  Vec3 relT = Vec3::Zero();
+  Vec4 relQ = Vec4(1, 0, 0, 0);
+  Mat6 relCov = Mat6::Zero();
 };
 }  // namespace immslam::slam

@@ -179,6 +179,13 @@ class CSlamTracker
   /** Removes features by id from every mode (e.g. caught moving). */
   void removeFeatures(const std::vector<std::int64_t>& ids);
 
+  /** Reports, every frame from frame `lag` on, the camera's motion over the last `lag` frames with the
+   * filter's own covariance (TFrameReport::relFrom, relT, relQ, relCov: the relative-pose consistency
+   * check of doc/estimator.md): the pose of every frame is cloned into the state for `lag` frames
+   * (CImmSlamFilter::clonePose; 7 more states per frame of lag, the estimate otherwise unchanged).
+   * 0 (the default): no clones. Call before the first frame. */
+  void setRelativePoseLag(int lag) { m_relativeLag = std::max(lag, 0); }
+
   /** The estimator. */
   const CImmSlamFilter& filter() const { return m_filter; }
   const TFrameReport& lastReport() const { return m_report; }
@@ -274,6 +281,8 @@ class CSlamTracker
   Vec3 m_lastTrackedR = Vec3::Zero();    ///< fused T_W_C at the end of the last frame not lost
   Vec4 m_lastTrackedQ = Vec4(1, 0, 0, 0);
   double m_sinceTracked = 0;  ///< frame periods since the end of the last frame not lost
+  int m_relativeLag = 0;      ///< setRelativePoseLag()
+  std::vector<std::pair<std::int64_t, double>> m_clonedTimes;  ///< (frame, timestamp) of the cloned frames
   int m_noMapFrames = 0;      ///< lost frames in a row whose relocalisation failed on a textured image
   bool m_sawNoMap = false;    ///< this frame's relocalisation attempt failed on a textured image
 };
