@@ -132,12 +132,13 @@ CImmSlamFilter::TPoseClones CImmSlamFilter::poseClones() const
     const int off = poseCloneOffset(c);
     out.frames.push_back(m_cloneFrames[static_cast<std::size_t>(c)]);
     out.r.push_back(m_xFused.segment<3>(off));
-    const Vec4 q = m_xFused.segment<4>(off + 3).normalized();
+    const Vec4 qs = m_xFused.segment<4>(off + 3);
+    const Vec4 q = qs.normalized();
     out.q.push_back(q);
     Mat4 L;
     math::quatMultiply(math::quatConjugate(q), q, nullptr, &L);
     J.block<3, 3>(6 * k, kPoseCloneDim * c).setIdentity();
-    J.block<3, 4>(6 * k + 3, kPoseCloneDim * c + 3) = 2.0 * L.bottomRows<3>();
+    J.block<3, 4>(6 * k + 3, kPoseCloneDim * c + 3) = 2.0 / qs.norm() * L.bottomRows<3>();  // (through q / |q|)
   }
   out.cov = J * P * J.transpose();
   out.cov = (0.5 * (out.cov + out.cov.transpose())).eval();
@@ -149,23 +150,8 @@ bool CImmSlamFilter::relativePose(std::int64_t frame, Vec3& t, Vec4& q, Mat6& co
   const auto it = std::find(m_cloneFrames.begin(), m_cloneFrames.end(), frame);
   if (frame < 0 || it == m_cloneFrames.end()) return false;
   const int off = poseCloneOffset(static_cast<int>(it - m_cloneFrames.begin()));
-  const Vec4 qc = m_xFused.segment<4>(off + 3).normalized();
-  const Mat3 R = math::quatToRotation(qc);
-  q = math::quatConjugate(qc);
-  t = -(R.transpose() * m_xFused.segment<3>(off));
-  // The clone's [b; a] (b = dr, a = 2 vec(conj(q_hat) (x) q)), then the inversion (chain rule).
-  Mat4 L;
-  math::quatMultiply(math::quatConjugate(qc), qc, nullptr, &L);
-  Eigen::Matrix<double, 6, 7> Jc = Eigen::Matrix<double, 6, 7>::Zero();
-  Jc.topLeftCorner<3, 3>().setIdentity();
-  Jc.bottomRightCorner<3, 4>() = 2.0 * L.bottomRows<3>();
-  Mat6 Ji = Mat6::Zero();
-  Ji.topLeftCorner<3, 3>() = -R.transpose();
-  Ji.topRightCorner<3, 3>() = math::skew(t);
-  Ji.bottomRightCorner<3, 3>() = -R;
-  const Eigen::Matrix<double, 6, 7> J = Ji * Jc;
-  cov = J * fusedCovarianceBlock(off, kPoseCloneDim) * J.transpose();
-  cov = (0.5 * (cov + cov.transpose())).eval();
+  invertPoseClone(m_xFused.segment<3>(off), m_xFused.segment<4>(off + 3), fusedCovarianceBlock(off, kPoseCloneDim), t,
+                  q, cov);
   return true;
 }
 

@@ -68,6 +68,26 @@ void reparametrize(bayes::TGaussian& g, const std::vector<TReparamSegment>& segs
   g.P = std::move(P);
 }
 
+void invertPoseClone(const Vec3& r, const Vec4& q, const MatX& P, Vec3& t, Vec4& qInv, Mat6& cov)
+{
+  const Vec4 qc = q.normalized();
+  const Mat3 R = math::quatToRotation(qc);
+  qInv = math::quatConjugate(qc);
+  t = -(R.transpose() * r);
+  Mat4 L;
+  math::quatMultiply(math::quatConjugate(qc), qc, nullptr, &L);
+  Eigen::Matrix<double, 6, 7> Jc = Eigen::Matrix<double, 6, 7>::Zero();
+  Jc.topLeftCorner<3, 3>().setIdentity();
+  Jc.bottomRightCorner<3, 4>() = 2.0 / q.norm() * L.bottomRows<3>();  // (through q / |q|)
+  Mat6 Ji = Mat6::Zero();
+  Ji.topLeftCorner<3, 3>() = -R.transpose();
+  Ji.topRightCorner<3, 3>() = math::skew(t);
+  Ji.bottomRightCorner<3, 3>() = -R;
+  const Eigen::Matrix<double, 6, 7> J = Ji * Jc;
+  cov = J * P * J.transpose();
+  cov = (0.5 * (cov + cov.transpose())).eval();
+}
+
 void normalizeQuaternion(bayes::TGaussian& g)
 {
   Mat4 J;

@@ -6,6 +6,7 @@
 #include <immslam/math/quaternion.h>
 #include <immslam/slam/CImmSlamFilter.h>
 #include <immslam/slam/robocentric_prediction.h>
+#include <immslam/slam/state_ops.h>
 
 #include <random>
 
@@ -129,6 +130,37 @@ TEST(PoseClones, PredictionCarriesEveryCloneAsTheWorldPose)
     }
     EXPECT_LT((G.P - Pexp).norm(), 1e-6 * P0.norm()) << spec;
     EXPECT_LT((G.P - G.P.transpose()).norm(), 1e-15) << spec;
+  }
+}
+
+TEST(PoseClones, InversionMatchesNumericalJacobians)
+{
+  // T_Cj_C = (T_C_Cj)^-1 of a clone (r, q) with a covariance in the state's (r, q): the covariance of
+  // the inverse's [dt; dtheta] is J P J^T with J the numerical Jacobian w.r.t. (r, q) (q not unit).
+  std::mt19937 rng(37);
+  std::normal_distribution<double> g;
+  for (int trial = 0; trial < 10; ++trial)
+  {
+    const Vec3 r(g(rng), g(rng), g(rng));
+    const Vec4 q = 1.3 * math::quatFromRotationVector(Vec3(0.5 * g(rng), 0.5 * g(rng), 0.5 * g(rng)));
+    const MatX P = test::randomCovariance(7, rng);
+    Vec3 t;
+    Vec4 qi;
+    Mat6 cov;
+    invertPoseClone(r, q, P, t, qi, cov);
+    const auto inv = [&](const VecX& x) -> VecX {
+      const Vec4 qp = x.tail<4>().normalized();
+      const Vec3 ti = -(math::quatToRotation(qp).transpose() * x.head<3>());
+      VecX e(6);
+      e << ti - t, math::quatToRotationVector(math::quatMultiply(math::quatConjugate(qi), math::quatConjugate(qp)));
+      return e;
+    };
+    VecX x0(7);
+    x0 << r, q;
+    EXPECT_LT(inv(x0).norm(), 1e-12);
+    const MatX J = math::numericalJacobian(inv, x0, 1e-7);
+    const MatX expected = J * P * J.transpose();
+    EXPECT_LT((cov - expected).norm(), 1e-6 * expected.norm()) << "trial " << trial;
   }
 }
 

@@ -43,6 +43,12 @@ struct TReparamSegment
  * \f$ P'_{ab} = T_a P_{ab} T_b^\top \f$ with T the identity for copies. */
 void reparametrize(bayes::TGaussian& g, const std::vector<TReparamSegment>& segs);
 
+/** The inverse T_Cj_C of a pose clone T_C_Cj = (r, q) (p_C = R(q) p_Cj + r; q need not be unit) with
+ * its 7x7 covariance P in the state's (r, q): t = -R^T r, qInv = conj(q) (normalized) and the covariance
+ * of [dt; dtheta] (t = t_hat + dt, R = R_hat Exp(dtheta)). Chain rule: the clone's perturbation
+ * b = dr, a = 2 vec(conj(q_hat) (x) dq) / |q| (q_hat = q / |q|), then dt = -R^T b + [t]x a, dtheta = -R a. */
+void invertPoseClone(const Vec3& r, const Vec4& q, const MatX& P, Vec3& t, Vec4& qInv, Mat6& cov);
+
 /** q <- q/|q| for the camera quaternion (state 3..6) with \f$ P \leftarrow J P J^\top \f$. */
 void normalizeQuaternion(bayes::TGaussian& g);
 }  // namespace immslam::slam
