@@ -124,7 +124,7 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
   if (m_relative && r.relFrom >= 0)
   {
     std::vector<io::CCsvCell> cells{r.timestamp, r.relFromTimestamp, r.relT.x(), r.relT.y(), r.relT.z(),
-                                             r.relQ[1], r.relQ[2], r.relQ[3], r.relQ[0]};
+                                    r.relQ[1],   r.relQ[2],          r.relQ[3],  r.relQ[0]};
     for (int i = 0; i < 6; ++i)
       for (int j = i; j < 6; ++j) cells.emplace_back(r.relCov(i, j));
     m_relative->addCells(cells);

@@ -90,12 +90,10 @@ std::string TRelativeNeesResult::summary() const
     if (v.empty()) return;
     const double bound = math::chi2Quantile(confidence, dof);
     const auto inside = std::count_if(v.begin(), v.end(), [bound](double x) { return x <= bound; });
-    double mean = 0;
-    for (double x : v) mean += x / static_cast<double>(v.size());
     std::snprintf(buf, sizeof buf,
                   "%-14s : NEES mean %.3f (consistent: %d), median %.3f (%.3f), inside the %.0f %% bound %.2f: "
                   "%.1f %% of the rows\n",
-                  what, mean, dof, median(v), math::chi2Quantile(0.5, dof), 100 * confidence, bound,
+                  what, eval::mean(v), dof, median(v), math::chi2Quantile(0.5, dof), 100 * confidence, bound,
                   100.0 * static_cast<double>(inside) / static_cast<double>(v.size()));
     s += buf;
   };

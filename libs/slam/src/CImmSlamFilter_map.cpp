@@ -112,39 +112,6 @@ void CImmSlamFilter::clonePose(const std::function<bool(std::int64_t)>& keep, in
   refreshFused();
 }
 
-CImmSlamFilter::TPoseClones CImmSlamFilter::poseClones() const
-{
-  TPoseClones out;
-  std::vector<int> slots;
-  for (int c = 0; c < numClones(); ++c)
-    if (m_cloneFrames[static_cast<std::size_t>(c)] >= 0) slots.push_back(c);
-  std::sort(slots.begin(), slots.end(), [this](int a, int b) {
-    return m_cloneFrames[static_cast<std::size_t>(a)] < m_cloneFrames[static_cast<std::size_t>(b)];
-  });
-  const int nc = static_cast<int>(slots.size());
-  if (nc == 0) return out;
-  const MatX P = fusedCovarianceBlock(poseCloneOffset(0), kPoseCloneDim * numClones());
-  // [dr; dtheta] with R = R_hat Exp(dtheta): dtheta = 2 vec(conj(q_hat) (x) q) (as cameraPoseCovariance).
-  MatX J = MatX::Zero(6 * nc, kPoseCloneDim * numClones());
-  for (int k = 0; k < nc; ++k)
-  {
-    const int c = slots[static_cast<std::size_t>(k)];
-    const int off = poseCloneOffset(c);
-    out.frames.push_back(m_cloneFrames[static_cast<std::size_t>(c)]);
-    out.r.push_back(m_xFused.segment<3>(off));
-    const Vec4 qs = m_xFused.segment<4>(off + 3);
-    const Vec4 q = qs.normalized();
-    out.q.push_back(q);
-    Mat4 L;
-    math::quatMultiply(math::quatConjugate(q), q, nullptr, &L);
-    J.block<3, 3>(6 * k, kPoseCloneDim * c).setIdentity();
-    J.block<3, 4>(6 * k + 3, kPoseCloneDim * c + 3) = 2.0 / qs.norm() * L.bottomRows<3>();  // (through q / |q|)
-  }
-  out.cov = J * P * J.transpose();
-  out.cov = (0.5 * (out.cov + out.cov.transpose())).eval();
-  return out;
-}
-
 bool CImmSlamFilter::relativePose(std::int64_t frame, Vec3& t, Vec4& q, Mat6& cov) const
 {
   const auto it = std::find(m_cloneFrames.begin(), m_cloneFrames.end(), frame);

@@ -1,6 +1,7 @@
 /* Tests of the SLAM filter's pose clones (stochastic cloning, robocentric_prediction.h): the prediction
  * carries a clone as it does the world pose, with the covariance of the numerical transition, and the
- * filter's slots (CImmSlamFilter::clonePose) are born exact, recycled in place and read out in order. */
+ * filter's slots (CImmSlamFilter::clonePose) are born exact, recycled in place and their motion read out
+ * (relativePose). */
 #include <gtest/gtest.h>
 #include <immslam/math/numerical_jacobian.h>
 #include <immslam/math/quaternion.h>
@@ -8,6 +9,7 @@
 #include <immslam/slam/robocentric_prediction.h>
 #include <immslam/slam/state_ops.h>
 
+#include <algorithm>
 #include <random>
 
 #include "slam_test_utils.h"
@@ -185,13 +187,23 @@ TEST(PoseClones, SlotsAreBornExactRecycledInPlaceAndReadInOrder)
   // The features and the camera are unchanged; the clone is the identity with no covariance.
   EXPECT_EQ(filter.fusedMean().head(motion::kCamDim), before.head(motion::kCamDim));
   EXPECT_EQ(filter.fusedMean().tail(12), before.tail(12));
-  auto pc = filter.poseClones();
-  ASSERT_EQ(pc.frames.size(), 1u);
-  EXPECT_EQ(pc.frames[0], 0);
-  EXPECT_TRUE(pc.r[0].isZero());
-  EXPECT_EQ(pc.q[0], Vec4(1, 0, 0, 0));
-  EXPECT_TRUE(pc.cov.isZero());
+  Vec3 t;
+  Vec4 q;
+  Mat6 cov;
+  ASSERT_EQ(filter.cloneSlots(), std::vector<std::int64_t>{0});
+  ASSERT_TRUE(filter.relativePose(0, t, q, cov));
+  EXPECT_TRUE(t.isZero());
+  EXPECT_EQ(q, Vec4(1, 0, 0, 0));
+  EXPECT_TRUE(cov.isZero());
   EXPECT_TRUE(filter.fusedCovarianceBlock(poseCloneOffset(0), kPoseCloneDim).isZero());
+  // The frames held, oldest first.
+  const auto heldFrames = [&filter] {
+    std::vector<std::int64_t> f;
+    for (const std::int64_t s : filter.cloneSlots())
+      if (s >= 0) f.push_back(s);
+    std::sort(f.begin(), f.end());
+    return f;
+  };
   // Two frames later: a second slot, then the oldest gives way in place (the state does not grow).
   for (int k = 1; k <= 3; ++k)
   {
@@ -202,47 +214,38 @@ TEST(PoseClones, SlotsAreBornExactRecycledInPlaceAndReadInOrder)
   }
   EXPECT_EQ(filter.numClones(), 2);
   EXPECT_EQ(filter.fusedMean().size(), before.size() + 2 * kPoseCloneDim);
-  pc = filter.poseClones();
-  ASSERT_EQ(pc.frames.size(), 2u);
-  EXPECT_EQ(pc.frames[0], 2);
-  EXPECT_EQ(pc.frames[1], 3);
-  EXPECT_EQ(pc.cov.rows(), 12);
+  EXPECT_EQ(heldFrames(), (std::vector<std::int64_t>{2, 3}));
   // The clone of frame 2 has been predicted once: it carries the camera's motion uncertainty.
-  EXPECT_GT(pc.cov.block(0, 0, 6, 6).trace(), 0.0);
-  EXPECT_TRUE(pc.cov.block(6, 6, 6, 6).isZero());
+  ASSERT_TRUE(filter.relativePose(2, t, q, cov));
+  EXPECT_GT(cov.trace(), 0.0);
+  ASSERT_TRUE(filter.relativePose(3, t, q, cov));
+  EXPECT_TRUE(cov.isZero());
   // A clone not kept leaves its slot free and the next clone takes it.
   filter.beginFrame();
   filter.predict(4 / 30.0);
   filter.finishUpdate();
   filter.clonePose([](std::int64_t f) { return f != 2; }, 2);
-  pc = filter.poseClones();
-  ASSERT_EQ(pc.frames.size(), 2u);
-  EXPECT_EQ(pc.frames[0], 3);
-  EXPECT_EQ(pc.frames[1], 4);
+  EXPECT_EQ(heldFrames(), (std::vector<std::int64_t>{3, 4}));
   EXPECT_EQ(filter.numClones(), 2);
   EXPECT_EQ(filter.features()[0].offset, poseCloneOffset(2));
 
-  // The motion since frame 3 is the inverse of its clone, with the covariance of the inversion's
-  // numerical Jacobian w.r.t. the clone's perturbation [dr; dtheta].
-  Vec3 t;
-  Vec4 q;
-  Mat6 cov;
+  // The motion since frame 3 is the inverse of its clone's block of the state, with the covariance of
+  // the inversion's numerical Jacobian w.r.t. that block (r, q).
   ASSERT_TRUE(filter.relativePose(3, t, q, cov));
   EXPECT_FALSE(filter.relativePose(2, t, q, cov));
-  const Vec3 r0 = pc.r[0];
-  const Vec4 q0 = pc.q[0];
-  const auto inv = [&](const VecX& d) -> VecX {
-    const Vec4 qp = math::quatMultiply(q0, math::quatFromRotationVector(d.tail<3>()));
-    const Vec3 rp = r0 + d.head<3>();
-    const Vec4 qi = math::quatConjugate(qp);
-    const Vec3 ti = -(math::quatToRotation(qp).transpose() * rp);
+  const auto slot = std::find(filter.cloneSlots().begin(), filter.cloneSlots().end(), 3) - filter.cloneSlots().begin();
+  const int off = poseCloneOffset(static_cast<int>(slot));
+  const VecX x0 = filter.fusedMean().segment<kPoseCloneDim>(off);
+  const auto inv = [&](const VecX& x) -> VecX {
+    const Vec4 qp = x.tail<4>().normalized();
+    const Vec3 ti = -(math::quatToRotation(qp).transpose() * x.head<3>());
     VecX e(6);
-    e << ti - t, math::quatToRotationVector(math::quatMultiply(math::quatConjugate(q), qi));
+    e << ti - t, math::quatToRotationVector(math::quatMultiply(math::quatConjugate(q), math::quatConjugate(qp)));
     return e;
   };
-  EXPECT_LT(inv(VecX::Zero(6)).norm(), 1e-12);
-  const MatX J = math::numericalJacobian(inv, VecX::Zero(6), 1e-7);
-  const MatX expected = J * pc.cov.block(0, 0, 6, 6) * J.transpose();
+  EXPECT_LT(inv(x0).norm(), 1e-12);
+  const MatX J = math::numericalJacobian(inv, x0, 1e-7);
+  const MatX expected = J * filter.fusedCovarianceBlock(off, kPoseCloneDim) * J.transpose();
   EXPECT_LT((cov - expected).norm(), 1e-6 * expected.norm());
 }
 }  // namespace immslam::slam

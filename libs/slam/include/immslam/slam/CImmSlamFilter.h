@@ -166,26 +166,17 @@ class CImmSlamFilter
   // ---- Pose clones (stochastic cloning; robocentric_prediction.h, poseCloneOffset) ----
   /** Clones the current camera pose: a block T_C_Ck at the identity with no covariance in every mode,
    * between the velocities and the features, which every later prediction carries along as it does
-   * the world pose while the updates correlate it with the camera, so that poseClones() gives the
-   * past frame's pose relative to the current one with the filter's own covariance. The clones of
+   * the world pose while the updates correlate it with the camera, so that relativePose() gives the
+   * camera's motion since the past frame with the filter's own covariance. The clones of
    * frames for which keep(frame) is false are dropped first; at most maxClones slots are held (the
    * oldest clone gives way), recycled in place. Call after the frame's update. */
   void clonePose(const std::function<bool(std::int64_t)>& keep, int maxClones);
   /** Number of clone slots in the state (in use or free). */
   int numClones() const { return static_cast<int>(m_cloneFrames.size()); }
-  /** The cloned poses (slots in use) in the current camera frame, fused (Fig. 2 step 4). */
-  struct TPoseClones
-  {
-    std::vector<std::int64_t> frames;  ///< frame of each clone, oldest first
-    std::vector<Vec3> r;               ///< T_C_Cj: p_C = R(q_j) p_Cj + r_j
-    std::vector<Vec4> q;
-    /** Joint covariance (6 per clone) of [dr_j; dtheta_j], r = r_hat + dr, R = R_hat Exp(dtheta). */
-    MatX cov;
-  };
-  TPoseClones poseClones() const;
+  /** The frame whose pose each clone slot holds, in state order (slot c at poseCloneOffset(c); -1: free). */
+  const std::vector<std::int64_t>& cloneSlots() const { return m_cloneFrames; }
   /** The camera's motion since the cloned frame j: T_{C_j C_k} = (T_{C_k C_j})^{-1}, p_Cj = R(q) p_Ck + t,
-   * and the covariance of [dt; dtheta] (t = t_hat + dt, R = R_hat Exp(dtheta)): with the clone's
-   * perturbation (b, a), dt = -R^T b + [t]x a and dtheta = -R a (R the clone's rotation).
+   * with the covariance of [dt; dtheta] (invertPoseClone of the clone's fused block).
    * \return false when frame j has no clone. */
   bool relativePose(std::int64_t frame, Vec3& t, Vec4& q, Mat6& cov) const;
 
