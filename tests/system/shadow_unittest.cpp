@@ -530,12 +530,15 @@ TEST(ShadowSystem, RealVideoOfAHandMovingABoxInFrontOfAStillCamera)
   // 34.9 deg (the IMM without shadow filter explains the box with general motion and a map at
   // infinity). A dynamic decision then came to need a track that follows one point (min_point_ncc):
   // 184 decisions on what moves (170 dynamic, moving->static 14 of 184), 7 of 25 on the background
-  // dynamic (13 of 30 before), 2.00 deg; without watched features 95 (13 static), 1.88 deg. Limits ~1.2x.
+  // dynamic (13 of 30 before), 2.00 deg; without watched features 95 (13 static), 1.88 deg. Since a
+  // pending feature's views start again after a miss (CShadowFilter::updateFeature): 152 decisions on
+  // what moves, 140 dynamic (moving->static 12 of 152), 0 of 11 on the background dynamic, 1.99 deg;
+  // without watched features 87 (12 static), 1.87 deg. Limits ~1.2x.
   EXPECT_LT(full.rotationRmseDeg, 2.53);
   EXPECT_GT(single.rotationRmseDeg, 10.0) << "the single model follows the box: the test must see that failure";
   EXPECT_GT(full.segmentation, 0.768);
   EXPECT_GT(full.segmentation, noShadow.segmentation + 0.3);
-  EXPECT_GE(full.decisions.trulyDynamic(), 153u);
+  EXPECT_GE(full.decisions.trulyDynamic(), 127u);
   EXPECT_LE(full.decisions.movingAsStaticRate(), 0.108);
   EXPECT_LT(notWatching.rotationRmseDeg, 2.31);
   EXPECT_GE(notWatching.decisions.trulyDynamic(), 79u);
@@ -564,8 +567,10 @@ TEST(ShadowSystem, RealVideoOfPeopleWalkingSeenByARotatingCamera)
   // slot longer; over the whole video 54 decisions on people, 1 static, against 85 and 11.8 %,
   // doc/shadow.md). Without them 26 decisions, all but one on the first map's probation copies.
   // Since a dynamic decision needs a track that follows one point (min_point_ncc; a walking person's
-  // patches deform): 9 decisions on people, all dynamic, 1 of 54 on the courtyard. Limits ~1.2x.
-  EXPECT_GE(full.decisions.trulyDynamic(), 7u);
+  // patches deform): 9 decisions on people, all dynamic, 1 of 54 on the courtyard. Since a pending
+  // feature's views start again after a miss (a walking person's features are missed often): 6 on
+  // people, all dynamic. Limits ~1.2x.
+  EXPECT_GE(full.decisions.trulyDynamic(), 5u);
   EXPECT_LE(full.decisions.movingAsStaticRate(), 0.095);
   EXPECT_LE(full.decisions.staticAsDynamicRate(), 0.041);
   EXPECT_LE(notWatching.decisions.dynamicAsStatic, 0u) << "nothing moving enters the map";

@@ -131,6 +131,11 @@ void CShadowFilter::predictAll(const TCameraMotion& motion)
 void CShadowFilter::updateFeature(TShadowFeature& f, const Vec2& z)
 {
   if (!updateShadowState(f.ekf, *m_cam, z, m_opts.sigma_pixel)) return;
+  // A feature missed in the frame before (f.missed) was searched again in a grown region, and this
+  // match may be another point (its template re-found on a neighbour): the views start again here, as
+  // after a camera motion the SLAM did not measure. Views of two points do not meet, so a static
+  // point's track that changed points across a miss would look dynamic (doc/shadow.md, "Decision rules").
+  if (f.missed > 0 && f.cls == EShadowClass::Pending) f.restartViews = true;
   f.uv = z;
   f.measured = true;
   f.missed = 0;
@@ -141,7 +146,8 @@ void CShadowFilter::updateFeature(TShadowFeature& f, const Vec2& z)
       f.track.addView(z);
     else if (m_motion.measured)
     {
-      // The first measurement after a frame without measured camera motion: the views start again here.
+      // The first measurement after a miss or a frame without measured camera motion: the views start
+      // again here.
       f.track.start(m_motion.frame, z);
       f.restartViews = false;
     }
