@@ -539,7 +539,6 @@ std::array<int, 3> runThroughALoss(bool measured, unsigned seed)
     m.cov_increment = cov;
     m.measured = measured || !(lost || relocalised);
     std::vector<std::pair<std::int64_t, Vec2>> z;
-    std::vector<Vec2> fresh;
     for (const auto& [id, i] : byId)
     {
       Vec2 uv;
@@ -552,16 +551,7 @@ std::array<int, 3> runThroughALoss(bool measured, unsigned seed)
       ++out[d.cls == EShadowClass::Dynamic ? 0 : 1];
       out[2] += k >= 20 && k <= 24;
     }
-    if (k == 0)
-    {
-      for (const auto& p : pts)
-      {
-        Vec2 uv;
-        if (cam->project(poses[0].toCamera(p), uv)) fresh.push_back(uv);
-      }
-      const auto ids = filter.addFeatures(fresh);
-      for (std::size_t i = 0; i < ids.size(); ++i) byId[ids[i]] = i;
-    }
+    if (k == 0) byId = addSeenPoints(filter, *cam, poses[0], pts);
   }
   return out;
 }

@@ -10,8 +10,10 @@
 
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <random>
+#include <vector>
 
 namespace immslam::shadow::test
 {
@@ -118,6 +120,23 @@ struct TPose
   Mat3 R() const { return math::quatToRotation(q); }
   Vec3 toCamera(const Vec3& p_W) const { return R().transpose() * (p_W - r); }
 };
+
+/** Starts a feature of `filter` at each point of `pts` that projects into the camera at `pose`; returns
+ * each new id's index into the projected points (in the order of `pts`). */
+inline std::map<std::int64_t, std::size_t> addSeenPoints(CShadowFilter& filter, const camera::CCameraModel& cam,
+                                                         const TPose& pose, const std::vector<Vec3>& pts)
+{
+  std::vector<Vec2> fresh;
+  for (const auto& p : pts)
+  {
+    Vec2 uv;
+    if (cam.project(pose.toCamera(p), uv)) fresh.push_back(uv);
+  }
+  const auto ids = filter.addFeatures(fresh);
+  std::map<std::int64_t, std::size_t> byId;
+  for (std::size_t i = 0; i < ids.size(); ++i) byId[ids[i]] = i;
+  return byId;
+}
 
 inline void report(const char* what, double value) { std::printf("[ shadow   ] %-70s %g\n", what, value); }
 }  // namespace immslam::shadow::test

@@ -65,17 +65,7 @@ std::array<int, 4> runWithJumps(unsigned seed)
     const TShadowReport& rep = filter.processMeasurements(m, z);
     for (const auto& d : rep.decisions)
       ++out[(byId.at(d.id) % 2 == 1 ? 0 : 2) + (d.cls == EShadowClass::Dynamic ? 0 : 1)];
-    if (k == 0)
-    {
-      std::vector<Vec2> fresh;
-      for (const auto& p : pts)
-      {
-        Vec2 uv;
-        if (cam->project(poses[0].toCamera(p), uv)) fresh.push_back(uv);
-      }
-      const auto ids = filter.addFeatures(fresh);
-      for (std::size_t i = 0; i < ids.size(); ++i) byId[ids[i]] = i;
-    }
+    if (k == 0) byId = addSeenPoints(filter, *cam, poses[0], pts);
   }
   return out;
 }
