@@ -61,10 +61,10 @@ TEST(MappedMovers, ParkedBoxLeavesTheMapAsDynamicTracksWithItsPast)
 {
   // Measured (seed 7, 150 frames): 7 SLAM features on the box when it starts (frame 90); at frame
   // 93 four are handed over (three rejections in a row: found beyond their ellipse), three lost;
-  // first dynamic decision on the box at frame 106 (16 frames after the start), 3 dynamic decisions
-  // on it, none static, all 3 with their mapped past (tracks.csv rows at 0 and 3 s); ATE 0.52 % of
-  // path (240 frames; main before: 114 frames to the first decision, from a feature detected anew).
-  // Limits at about 1.2 x.
+  // first dynamic decision on the box at frame 106 (16 frames after the start), 2 dynamic decisions
+  // on it (a translating camera's lone dynamic verdict waits for another feature nearby that moves:
+  // doc/shadow.md, "Decision rules"), none static, both with their mapped past (tracks.csv rows at 0
+  // and 3 s). Limits at about 1.2 x.
   const auto out = outDir("parked_mover");
   ASSERT_EQ(runApp({sourceDir() + "/ini/imm7-shadow.ini", "--out", out, "--frames", "150", "--set",
                     "input.scenario=scenarios/parked-mover.ini"}),
@@ -97,7 +97,7 @@ TEST(MappedMovers, ParkedBoxLeavesTheMapAsDynamicTracksWithItsPast)
               "tracks with their mapped past\n",
               latency, dynamicOnBox, staticOnBox, withPast.size());
   EXPECT_LE(latency, 20.0);
-  EXPECT_GE(dynamicOnBox, 3);
+  EXPECT_GE(dynamicOnBox, 2);
   EXPECT_EQ(staticOnBox, 0);
   EXPECT_GE(withPast.size(), 2u) << "the tracks of the box's mapped features must start where it was mapped";
 }

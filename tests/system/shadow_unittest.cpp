@@ -46,9 +46,11 @@ TEST(ShadowSystem, MonoslammotSynth19ClassificationAgainstPointGroundTruth)
               "ATE %.3f %% of path\n",
               c.dynamicAsStatic, c.trulyDynamic(), c.movingAsStaticRate(), c.staticAsDynamic, c.trulyStatic(),
               c.staticAsDynamicRate(), res.unmatched, 100 * s.ate->rmseOverPath);
-  // Limits at ~1.2x the measured figures (2026-11-27): moving->static 0 of 31, static->dynamic 2 of
-  // 129 (1.6 %), ATE 0.556 % of path.
-  EXPECT_GE(c.trulyDynamic(), 26u);
+  // Measured: moving->static 0 of 21, static->dynamic 1 of 133 (0.8 %), ATE 0.362 % of path; the
+  // limits are ~1.2x an earlier, worse measurement (2 of 129, 1.6 %; 0.556 %). 21 decisions on movers, not more: a lone dynamic verdict of a translating
+  // camera waits for another feature nearby that moves, and the movers of this simulated world are
+  // points that move each on its own path (doc/shadow.md, "Decision rules").
+  EXPECT_GE(c.trulyDynamic(), 18u);
   EXPECT_LE(c.movingAsStaticRate(), 0.01);
   EXPECT_LE(c.staticAsDynamicRate(), 0.019);
   ASSERT_TRUE(s.ate);
@@ -75,11 +77,13 @@ TEST(ShadowSystem, KnownAssociationReproducesFig5OnSynth19)
       app::TRunSummary s;
       // The paper's protocol: the classic filter uses every measurement given (no gate, no RANSAC),
       // starts on static points only (Sec. II) and takes no unresolved feature (no release), so only
-      // the shadow filter's decisions stand between it and the moving points.
+      // the shadow filter's decisions stand between it and the moving points; the paper's filter
+      // decides a point that moves alone at once (its moving points move each on its own path).
       ASSERT_EQ(runApp({sourceDir() + "/ini/" + cfg + ".ini", data, "--out", out,
                         "--set", "input.known_association=" + points, "--set", "input.known_association_kinds=" + kinds,
                         "--set", "input.known_association_robust=false", "--set",
-                        "input.known_association_first_map=static", "--set", "system.starved_below=0"},
+                        "input.known_association_first_map=static", "--set", "system.starved_below=0",
+                        "--set", "shadow.decide_lone_dynamic=true"},
                        &s),
                 0)
           << name;

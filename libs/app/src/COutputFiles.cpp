@@ -43,7 +43,7 @@ COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& sla
   if (searchLog && shadow)
     m_shadowLog = std::make_unique<io::CCsvWriter>(
         path("shadow_log.csv"),
-        std::vector<std::string>{"timestamp", "feature_id", "class", "u", "v", "searched", "measured", "age_frames"});
+        std::vector<std::string>{"timestamp", "feature_id", "class", "u", "v", "searched", "measured", "age_frames", "score"});
   if (searchLog)
     m_searches = std::make_unique<io::CCsvWriter>(
         path("searches.csv"), std::vector<std::string>{"timestamp", "feature_id", "h_u", "h_v", "s_uu", "s_uv", "s_vv",
@@ -51,10 +51,10 @@ COutputFiles::COutputFiles(const std::string& dir, const slam::CMonoSlamIMM& sla
   if (relativePoses)
   {
     // The motion T_{C_j C_k} since the frame at from_timestamp and the upper triangle of its covariance.
-    std::vector<std::string> cols{"timestamp", "from_timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
+    std::vector<std::string> relCols{"timestamp", "from_timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
     for (int i = 0; i < 6; ++i)
-      for (int j = i; j < 6; ++j) cols.push_back("c" + std::to_string(i) + std::to_string(j));
-    m_relative = std::make_unique<io::CCsvWriter>(path("relative_poses.csv"), cols);
+      for (int j = i; j < 6; ++j) relCols.push_back("c" + std::to_string(i) + std::to_string(j));
+    m_relative = std::make_unique<io::CCsvWriter>(path("relative_poses.csv"), relCols);
   }
 }
 
@@ -108,7 +108,7 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
     {
       for (const auto& v : fr.shadow->views)
         m_shadowLog->addCells({r.timestamp, v.id, shadow::className(v.cls), v.uv.x(), v.uv.y(), v.searched ? 1 : 0,
-                               v.measured ? 1 : 0, v.ageFrames});
+                               v.measured ? 1 : 0, v.ageFrames, v.score});
       m_shadowLog->flush();
     }
   }

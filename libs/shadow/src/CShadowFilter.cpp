@@ -60,6 +60,12 @@ void CShadowFilter::removeFeatures(const std::vector<std::int64_t>& ids)
                    m_features.end());
 }
 
+void CShadowFilter::setMapCopies(const std::vector<std::int64_t>& ids, bool copies)
+{
+  for (auto& f : m_features)
+    if (std::find(ids.begin(), ids.end(), f.id) != ids.end()) f.mapCopy = copies;
+}
+
 std::vector<Vec2> CShadowFilter::occupiedPixels() const
 {
   std::vector<Vec2> out;
@@ -119,6 +125,7 @@ void CShadowFilter::predictAll(const TCameraMotion& motion)
     // and no decision) and start again at the next measurement of a measured frame (updateFeature).
     if (!motion.measured && f.cls == EShadowClass::Pending) f.restartViews = true;
     f.searched = f.measured = false;
+    f.score = 0;
     if (!shadowInnovation(f.ekf, *m_cam, m_opts.sigma_pixel, f.predicted, f.S))
     {
       f.predicted = Vec2::Constant(std::numeric_limits<double>::quiet_NaN());
@@ -227,6 +234,15 @@ double medianScore(std::vector<float> scores)
   return *mid;
 }
 
+/** How many of the pixels `uvs` lie within `radius` px of pixel `uv`. */
+int countNear(const Vec2& uv, const std::vector<Vec2>& uvs, double radius)
+{
+  int n = 0;
+  for (const auto& d : uvs)
+    if ((d - uv).squaredNorm() < radius * radius) ++n;
+  return n;
+}
+
 /** Whether at least 2 of the dynamic features measured in this frame (`dynamicUv`) lie within `radius`
  * px of pixel `uv` (one dynamic neighbour may be a false decision). A static decision there waits
  * (classifyAndManage): a point that does not move among points of an object seen moving is more likely
@@ -235,10 +251,7 @@ double medianScore(std::vector<float> scores)
  * about a mover that is momentarily still. */
 bool amongDynamic(const Vec2& uv, const std::vector<Vec2>& dynamicUv, double radius)
 {
-  int n = 0;
-  for (const auto& d : dynamicUv)
-    if ((d - uv).squaredNorm() < radius * radius && ++n >= 2) return true;
-  return false;
+  return countNear(uv, dynamicUv, radius) >= 2;
 }
 
 }  // namespace
@@ -259,15 +272,9 @@ void CShadowFilter::recordDecision(const TShadowFeature& f, EShadowClass c, TDec
   m_report.decisions.push_back(info);
 }
 
-void CShadowFilter::classifyAndManage()
+std::vector<CShadowFilter::TVerdict> CShadowFilter::classifyPending(const std::vector<Vec2>& dynamicUv, double radius,
+                                                                    std::vector<Vec2>& dynamicVerdictUv)
 {
-  const auto t0 = std::chrono::steady_clock::now();
-  // Where the dynamic features measured in this frame are: a static decision waits while the
-  // feature is among them (amongDynamic), within a cell of SLAM's default 8 x 6 detection grid.
-  const double amongRadius = m_cam->width() / 8.0;
-  std::vector<Vec2> dynamicUv;
-  for (const auto& f : m_features)
-    if (f.cls == EShadowClass::Dynamic && f.measured) dynamicUv.push_back(f.uv);
   // While the camera does not translate (the bank's stationary and rotation families), a static
   // decision waits until the track is still_camera_static_frames long: the depth-free test then has
   // power against slow image motion too (a mover at a turning point or pausing, one moving along its
@@ -275,58 +282,115 @@ void CShadowFilter::classifyAndManage()
   // takes the unresolved features it needs and a watched feature decided static is only retired; with
   // translation it would hold back the features SLAM needs.
   const bool notTranslating = m_motion.pNotTranslating >= 0.5;
-  std::vector<TShadowFeature> kept;
-  kept.reserve(m_features.size());
+  const double staticNotBefore = notTranslating ? m_opts.still_camera_static_frames : 0;
+  std::vector<TVerdict> verdicts(m_features.size());
+  for (std::size_t i = 0; i < m_features.size(); ++i)
+  {
+    auto& f = m_features[i];  // the classifier keeps its tests' record in the track
+    if (f.cls != EShadowClass::Pending || !f.ekf.x.allFinite() || !f.ekf.P.allFinite()) continue;
+    auto& v = verdicts[i];
+    v.c = m_classifier.classify(f.track, &v.info, &v.r, m_map.empty() ? nullptr : &m_map, staticNotBefore);
+    if (v.c == EShadowClass::Static && amongDynamic(f.uv, dynamicUv, radius)) v.c = EShadowClass::Pending;
+    if (v.c == EShadowClass::Dynamic) dynamicVerdictUv.push_back(f.uv);
+  }
+  return verdicts;
+}
+
+bool CShadowFilter::decide(TShadowFeature& f, const TVerdict& v, bool othersMove)
+{
+  if (v.c == EShadowClass::Dynamic)
+  {
+    f.cls = EShadowClass::Dynamic;
+    // Motion seen, but the template follows no point (min_point_ncc): held with no decision.
+    f.incoherent = !followsOnePoint(f);
+    // Motion seen by this feature alone while the camera translated: held until another one there
+    // moves. (A template slides on near 3-D structure through parallax: over a track the camera did
+    // not translate, a lone verdict is decided at once.)
+    f.lone = !f.incoherent && !f.mapCopy && !m_opts.decide_lone_dynamic && f.track.notTranslating < 0.5 &&
+             !othersMove;
+    if (f.lone)
+    {
+      f.incoherent = true;
+      f.loneVerdict = v.info;
+    }
+    f.track.views.clear();
+    f.track.views.shrink_to_fit();
+    f.scores.clear();
+    f.scores.shrink_to_fit();
+    ++(f.lone ? m_report.nLone : f.incoherent ? m_report.nIncoherent : m_report.nNewDynamic);
+  }
+  if (v.c != EShadowClass::Pending && !f.incoherent) recordDecision(f, v.c, v.info);
+  if (v.c != EShadowClass::Static) return true;
+  m_report.promotions.push_back(makePromotion(f, v.r));
+  ++m_report.nPromoted;
+  return false;  // leaves the shadow filter
+}
+
+bool CShadowFilter::keep(const TShadowFeature& f, bool healthy)
+{
+  if (f.cls == EShadowClass::Pending)
+  {
+    if (!healthy || f.missed > m_opts.max_missed_frames)
+    {
+      ++m_report.nLost;
+      return false;
+    }
+    if (f.age >= m_opts.max_pending_frames)
+    {
+      ++m_report.nTimedOut;
+      return false;
+    }
+    return true;
+  }
+  if (!healthy || f.missed > m_opts.dynamic_max_missed_frames)
+  {
+    ++m_report.nDynamicDropped;
+    return false;
+  }
+  return true;
+}
+
+void CShadowFilter::classifyAndManage()
+{
+  const auto t0 = std::chrono::steady_clock::now();
+  // Where the dynamic features measured in this frame are: a static decision waits while the
+  // feature is among them (amongDynamic), within a cell of SLAM's default 8 x 6 detection grid.
+  const double amongRadius = m_cam->width() / 8.0;
+  std::vector<Vec2> dynamicUv;
   for (auto& f : m_features)
   {
     if (!f.measured) ++f.missed;
+    if (f.cls == EShadowClass::Dynamic && f.measured) dynamicUv.push_back(f.uv);
+  }
+  // The classifier's verdicts first, then the decisions: a dynamic verdict is decided only when
+  // another feature within the same radius moves too (one decided dynamic or held alone, measured in
+  // this frame, or a dynamic verdict of this frame). Alone, the feature is held like an incoherent one
+  // (TShadowFeature::lone) and decided once another one there moves: on a static real scene nearly
+  // every false dynamic verdict is a lone track that slid along near 3-D structure or low texture
+  // (doc/shadow.md, "Decision rules"), while the objects users see move (people, boxes, hands) are
+  // seen by several features. A copy of a map feature is decided alone (the map uses it meanwhile).
+  std::vector<Vec2> movingUv, dynamicVerdictUv;
+  for (const auto& f : m_features)
+    if (f.cls == EShadowClass::Dynamic && f.measured && (!f.incoherent || f.lone)) movingUv.push_back(f.uv);
+  const std::vector<TVerdict> verdicts = classifyPending(dynamicUv, amongRadius, dynamicVerdictUv);
+  // Itself among the pixels counted (its verdict or its measurement), so "another one" is 2.
+  const auto othersMove = [&](const Vec2& uv)
+  { return countNear(uv, movingUv, amongRadius) + countNear(uv, dynamicVerdictUv, amongRadius) >= 2; };
+  std::vector<TShadowFeature> kept;
+  kept.reserve(m_features.size());
+  for (std::size_t i = 0; i < m_features.size(); ++i)
+  {
+    auto& f = m_features[i];
     const bool healthy = f.ekf.x.allFinite() && f.ekf.P.allFinite();
-    if (f.cls == EShadowClass::Pending && healthy)
+    if (f.lone && f.measured && healthy && othersMove(f.uv))
     {
-      TDecision info;
-      TRayTestResult r;
-      const double staticNotBefore = notTranslating ? m_opts.still_camera_static_frames : 0;
-      EShadowClass c =
-          m_classifier.classify(f.track, &info, &r, m_map.empty() ? nullptr : &m_map, staticNotBefore);
-      if (c == EShadowClass::Static && amongDynamic(f.uv, dynamicUv, amongRadius)) c = EShadowClass::Pending;
-      if (c == EShadowClass::Dynamic)
-      {
-        f.cls = EShadowClass::Dynamic;
-        // Motion seen, but the template follows no point (min_point_ncc): held with no decision.
-        f.incoherent = !followsOnePoint(f);
-        f.track.views.clear();
-        f.track.views.shrink_to_fit();
-        f.scores.clear();
-        f.scores.shrink_to_fit();
-        ++(f.incoherent ? m_report.nIncoherent : m_report.nNewDynamic);
-      }
-      if (c != EShadowClass::Pending && !f.incoherent) recordDecision(f, c, info);
-      if (c == EShadowClass::Static)
-      {
-        m_report.promotions.push_back(makePromotion(f, r));
-        ++m_report.nPromoted;
-        continue;  // leaves the shadow filter
-      }
+      f.lone = f.incoherent = false;
+      ++m_report.nNewDynamic;
+      ++m_report.nLoneDecided;
+      recordDecision(f, EShadowClass::Dynamic, f.loneVerdict);
     }
-    if (f.cls == EShadowClass::Pending)
-    {
-      if (!healthy || f.missed > m_opts.max_missed_frames)
-      {
-        ++m_report.nLost;
-        continue;
-      }
-      if (f.age >= m_opts.max_pending_frames)
-      {
-        ++m_report.nTimedOut;
-        continue;
-      }
-    }
-    else if (!healthy || f.missed > m_opts.dynamic_max_missed_frames)
-    {
-      ++m_report.nDynamicDropped;
-      continue;
-    }
-    kept.push_back(std::move(f));
+    if (f.cls == EShadowClass::Pending && healthy && !decide(f, verdicts[i], othersMove(f.uv))) continue;
+    if (keep(f, healthy)) kept.push_back(std::move(f));
   }
   m_features.swap(kept);
   m_report.tClassifyMs = msSince(t0);
@@ -365,6 +429,7 @@ void CShadowFilter::endFrame()
     v.S = f.S;
     v.searched = f.searched;
     v.measured = f.measured;
+    v.score = f.measured ? f.score : 0;
     v.incoherent = f.incoherent;
     v.ageFrames = static_cast<int>(std::lround(f.age));
     m_report.views.push_back(v);
@@ -401,6 +466,7 @@ void CShadowFilter::update(const std::vector<TShadowMatch>& matches)
     if (m.found && m.uv.allFinite())
     {
       updateFeature(f, m.uv);
+      f.score = m.score;
       if (f.cls == EShadowClass::Pending) f.scores.push_back(static_cast<float>(m.score));
     }
   }

@@ -10,6 +10,7 @@ void CShadowFilter::TOptions::loadFromConfigFile(const mrpt::config::CConfigFile
 {
   IMMSLAM_LOAD_DOUBLE(sigma_accel_px);
   IMMSLAM_LOAD_INT(max_features);
+  IMMSLAM_LOAD_BOOL(decide_lone_dynamic);
   validate(s);
 }
 
@@ -17,6 +18,9 @@ void CShadowFilter::TOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
 {
   MRPT_SAVE_CONFIG_VAR_COMMENT(sigma_accel_px, "feature acceleration noise (px/frame^2 at unit depth)");
   MRPT_SAVE_CONFIG_VAR_COMMENT(max_features, "maximum number of features held");
+  MRPT_SAVE_CONFIG_VAR_COMMENT(decide_lone_dynamic,
+                               "decide a translating camera's dynamic verdict at once even where no other feature nearby "
+                               "moves (true: movers seen by one feature each, the papers' random points)");
 }
 
 void CShadowFilter::TOptions::validate(const std::string& s) const

@@ -286,7 +286,9 @@ int CMonoSlamSystem::promoteFromShadow(const shadow::TShadowReport& srep, const 
   // Outcomes of the pending features that left the shadow filter this frame (pendingWeight()).
   const int became = srep.nPromoted + m_frame.released;
   m_becameSlam = kOutcomeDecay * m_becameSlam + became;
-  m_left = kOutcomeDecay * m_left + became + srep.nNewDynamic + srep.nLost + srep.nTimedOut;
+  // (A feature held alone leaves the pending ones when it is held, not when it is decided.)
+  m_left = kOutcomeDecay * m_left + became + srep.nNewDynamic - srep.nLoneDecided + srep.nLone + srep.nLost +
+           srep.nTimedOut;
   return pendingVisible;
 }
 

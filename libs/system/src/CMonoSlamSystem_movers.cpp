@@ -51,6 +51,7 @@ std::vector<std::pair<std::int64_t, std::int64_t>> CMonoSlamSystem::handOver(con
           {
             m_pastOf[c->second] = mappedPast(f, c->second);
             m_probation.erase(c->second);
+            m_shadow->setMapCopies({c->second}, false);
             moved.emplace_back(f.id, c->second);
             continue;
           }
@@ -96,6 +97,7 @@ void CMonoSlamSystem::startProbation(const cv::Mat& grey, const std::vector<std:
     of.push_back(f.id);
   }
   const auto ids = m_shadow->addFeatures(grey, uv);
+  m_shadow->setMapCopies(ids, true);
   for (std::size_t k = 0; k < ids.size(); ++k)
     if (ids[k] >= 0) m_probation[ids[k]] = of[k];
 }

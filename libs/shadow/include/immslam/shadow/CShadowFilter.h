@@ -53,11 +53,19 @@ struct TShadowFeature
   Mat2 S = Mat2::Identity();                 ///< innovation covariance of this frame
   Vec2 uv = Vec2::Zero();                    ///< last measured pixel
   bool searched = false, measured = false;   ///< in this frame
+  double score = 0;                          ///< ZNCC of this frame's match (0: not measured)
   std::vector<float> scores;                 ///< ZNCC of its matches while pending (TShadowMatch::score)
   /** Its rays do not meet, but its template does not follow one point (TOptions::min_point_ncc): motion
    * seen there, no decision made. Held like a dynamic feature (cls Dynamic: a static decision among
    * such features waits), never reported as a decision or a track. */
   bool incoherent = false;
+  /** Motion seen while no other feature nearby moved (CShadowFilter::classifyAndManage): held like an
+   * incoherent feature, and decided dynamic (with `loneVerdict`) once another one there moves too. */
+  bool lone = false;
+  TDecision loneVerdict;
+  /** A copy of a feature the SLAM map holds (setMapCopies): its dynamic verdict is decided alone, since
+   * the map uses the point while it waits. */
+  bool mapCopy = false;
 };
 
 /** One feature's association in a frame (CShadowFilter::update): searched for, and found at uv or not. */
@@ -127,6 +135,13 @@ class CShadowFilter
      * dynamic decisions on the background. 0: no check. */
     static constexpr double kMinPointNcc = 0.87;
     double min_point_ncc = kMinPointNcc;
+    /** [shadow] decide_lone_dynamic: a dynamic verdict of a translating camera is decided at once even
+     * when no other feature nearby moves (within an eighth of the image width). false (the default):
+     * such a feature is held as motion seen (TShadowFeature::lone) until another one there moves; on a
+     * static real scene nearly every false dynamic decision is such a lone track (doc/shadow.md,
+     * "Decision rules"). true: the papers' filter, for movers seen by one feature each (their
+     * random-point experiments). */
+    bool decide_lone_dynamic = false;
     // -- Management
     static constexpr int kMaxPendingFrames = 150;       ///< undecided features dropped after 150 frames
     static constexpr int kMaxMissedFrames = 5;          ///< pending features dropped after 5 misses in a row
@@ -205,6 +220,8 @@ class CShadowFilter
   const TShadowFeature* feature(std::int64_t id) const;
   /** Removes features by id (e.g. matched by the caller to something else). */
   void removeFeatures(const std::vector<std::int64_t>& ids);
+  /** Marks features as copies of features the SLAM map holds, or no longer (TShadowFeature::mapCopy). */
+  void setMapCopies(const std::vector<std::int64_t>& ids, bool copies);
 
   /** The SLAM map's measurements of frame `frame` (its inliers: id, pixel), given before that frame's
    * processFrame/processMeasurements: the reference of the three-ray test (CRayClassifier::mapScale). */
@@ -227,6 +244,22 @@ class CShadowFilter
   void predictAll(const TCameraMotion& motion);
   void updateFeature(TShadowFeature& f, const Vec2& z);
   void classifyAndManage();
+  /** The classifier's verdict on a pending feature in this frame (classifyAndManage). */
+  struct TVerdict
+  {
+    EShadowClass c = EShadowClass::Pending;
+    TDecision info;
+    TRayTestResult r;
+  };
+  /** The verdicts on the healthy pending features (by index into m_features; Pending for the others);
+   * the pixels of the dynamic ones are appended to dynamicVerdictUv. */
+  std::vector<TVerdict> classifyPending(const std::vector<Vec2>& dynamicUv, double radius,
+                                        std::vector<Vec2>& dynamicVerdictUv);
+  /** Applies verdict v to the pending feature f (othersMove: another feature near it moves); false when
+   * f leaves the filter (promoted). */
+  bool decide(TShadowFeature& f, const TVerdict& v, bool othersMove);
+  /** Whether f stays (not lost, timed out or dropped; those are counted in the report). */
+  bool keep(const TShadowFeature& f, bool healthy);
   /** Whether the feature's matches follow one point (TOptions::min_point_ncc). */
   bool followsOnePoint(const TShadowFeature& f) const;
   /** Adds the decision c on f (the classifier's figures in info) to this frame's report. */

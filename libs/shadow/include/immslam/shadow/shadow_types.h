@@ -122,6 +122,7 @@ struct TFeatureView
   Mat2 S = Mat2::Identity();    ///< innovation covariance of the search
   bool searched = false;        ///< predicted inside the image and searched
   bool measured = false;        ///< matched (and used in the update)
+  double score = 0;             ///< ZNCC of the match against its template (0: not measured or not known)
   /** cls Dynamic without a decision: seen moving, its template following no point
    * (CShadowFilter::TOptions::min_point_ncc); shown and counted as undecided. */
   bool incoherent = false;
@@ -144,6 +145,8 @@ struct TShadowReport
   int nLost = 0;                       ///< pending features dropped after too many misses
   int nDynamicDropped = 0;             ///< dynamic features dropped after too many misses
   int nIncoherent = 0;                 ///< features found moving in this frame whose template follows no point (held, no decision)
+  int nLone = 0;                       ///< features found moving in this frame while no other one nearby moves (held until one does)
+  int nLoneDecided = 0;                ///< of nNewDynamic: features held alone before (nLone of an earlier frame)
   double timeMs = 0;                   ///< wall time of the frame
   double tPredictMs = 0, tSearchMs = 0, tUpdateMs = 0, tClassifyMs = 0;
 };

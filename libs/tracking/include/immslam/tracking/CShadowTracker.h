@@ -54,6 +54,8 @@ class CShadowTracker
                                             const std::unordered_set<std::int64_t>& notReleased = {});
   /** Removes features by id (CShadowFilter::removeFeatures). */
   void removeFeatures(const std::vector<std::int64_t>& ids);
+  /** Marks copies of SLAM map features, or no longer (CShadowFilter::setMapCopies). */
+  void setMapCopies(const std::vector<std::int64_t>& ids, bool copies) { m_filter.setMapCopies(ids, copies); }
   /** Measured or predicted pixels of all held features (to keep new detections away). */
   std::vector<Vec2> occupiedPixels() const { return m_filter.occupiedPixels(); }
   /** The held features (read-only). */
