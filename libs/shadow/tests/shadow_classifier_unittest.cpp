@@ -118,10 +118,7 @@ void runSequence(Rng& rng, const CShadowFilter::TOptions& opts, int nStatic, int
   std::map<std::int64_t, size_t> byId;
   for (int k = 0; k < nFrames; ++k)
   {
-    TCameraMotion m = TCameraMotion::FromPoses(poses[k > 0 ? k - 1 : 0].r, poses[k > 0 ? k - 1 : 0].q, poses[k].r,
-                                               poses[k].q);
-    m.frame = k;
-    m.timestamp = k / kFps;
+    TCameraMotion m = pathMotion(poses, k, kFps, Mat6::Zero());
     if (k > 0)
     {
       TUncertainPose inc;

@@ -121,6 +121,18 @@ struct TPose
   Vec3 toCamera(const Vec3& p_W) const { return R().transpose() * (p_W - r); }
 };
 
+/** The exact camera motion from poses[k-1] to poses[k] (none at k = 0), as frame k at `fps`, with the
+ * increment covariance `cov`. */
+inline TCameraMotion pathMotion(const std::vector<TPose>& poses, int k, double fps, const Mat6& cov)
+{
+  const TPose& from = poses[k > 0 ? k - 1 : 0];
+  TCameraMotion m = TCameraMotion::FromPoses(from.r, from.q, poses[k].r, poses[k].q);
+  m.frame = k;
+  m.timestamp = k / fps;
+  m.cov_increment = cov;
+  return m;
+}
+
 /** Starts a feature of `filter` at each point of `pts` that projects into the camera at `pose`; returns
  * each new id's index into the projected points (in the order of `pts`). */
 inline std::map<std::int64_t, std::size_t> addSeenPoints(CShadowFilter& filter, const camera::CCameraModel& cam,

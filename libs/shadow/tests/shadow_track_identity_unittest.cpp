@@ -49,11 +49,7 @@ std::array<int, 4> runWithJumps(unsigned seed)
   const Mat6 cov = Mat6::Identity() * 1e-8;
   for (int k = 0; k < 120; ++k)
   {
-    TCameraMotion m = TCameraMotion::FromPoses(poses[k > 0 ? k - 1 : 0].r, poses[k > 0 ? k - 1 : 0].q, poses[k].r,
-                                               poses[k].q);
-    m.frame = k;
-    m.timestamp = k / 30.0;
-    m.cov_increment = cov;
+    const TCameraMotion m = pathMotion(poses, k, 30.0, cov);
     std::vector<std::pair<std::int64_t, Vec2>> z;
     for (const auto& [id, i] : byId)
     {
@@ -119,11 +115,7 @@ std::array<int, 4> runWithSlides(unsigned seed, bool decideLone, bool slidesAreC
   const Mat6 cov = Mat6::Identity() * 1e-8;
   for (int k = 0; k < 120; ++k)
   {
-    TCameraMotion m = TCameraMotion::FromPoses(poses[k > 0 ? k - 1 : 0].r, poses[k > 0 ? k - 1 : 0].q, poses[k].r,
-                                               poses[k].q);
-    m.frame = k;
-    m.timestamp = k / 30.0;
-    m.cov_increment = cov;
+    const TCameraMotion m = pathMotion(poses, k, 30.0, cov);
     std::vector<std::pair<std::int64_t, Vec2>> z;
     for (const auto& [id, i] : byId)
     {
