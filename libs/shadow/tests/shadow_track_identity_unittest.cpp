@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdio>
 #include <map>
+#include <optional>
 
 #include "shadow_test_utils.h"
 
@@ -19,6 +20,36 @@ using namespace immslam::shadow::test;
 
 namespace
 {
+/** Runs `filter` over the frames of `poses` with known association (exact camera motion, 1 px noise):
+ * the features start in frame 0 at the points `pts` that it sees (started(byId) then, byId: id ->
+ * index into pts); in frame k feature i is measured at the projection of where(k, i) (std::nullopt:
+ * missed) moved by shift(k, i); decided(decision, i) sees each decision. */
+template <class Where, class Shift, class Decided, class Started>
+void runKnownTracks(CShadowFilter& filter, const camera::CCameraModel& cam, const std::vector<TPose>& poses,
+                    const std::vector<Vec3>& pts, Rng& rng, Where where, Shift shift, Decided decided, Started started)
+{
+  std::map<std::int64_t, std::size_t> byId;
+  const Mat6 cov = Mat6::Identity() * 1e-8;
+  for (int k = 0; k < static_cast<int>(poses.size()); ++k)
+  {
+    std::vector<std::pair<std::int64_t, Vec2>> z;
+    for (const auto& [id, i] : byId)
+    {
+      const std::optional<Vec3> p = where(k, i);
+      Vec2 uv;
+      if (p && cam.project(poses[k].toCamera(*p), uv) && cam.isInImage(uv, 2))
+        z.emplace_back(id, uv + shift(k, i) + Vec2(gauss(rng), gauss(rng)));
+    }
+    for (const auto& d : filter.processMeasurements(pathMotion(poses, k, 30.0, cov), z).decisions)
+      decided(d, byId.at(d.id));
+    if (k == 0)
+    {
+      byId = addSeenPoints(filter, cam, poses[0], pts);
+      started(byId);
+    }
+  }
+}
+
 /** Static points seen by a hand-held camera (known association, 1 px noise, 120 frames). Every second
  * point is missed in frames 8-9 and from frame 10 on its track follows another static point (the
  * "neighbour": 8 px away in the image at frame 10, at 1.6 times its depth), as a template re-found in
@@ -44,27 +75,17 @@ std::array<int, 4> runWithJumps(unsigned seed)
     const Vec2 shifted = at10 + 8.0 * randomUnit(rng).head<2>().normalized();
     neighbours.push_back(poses[10].r + poses[10].R() * (cam->unproject(shifted).unitVector() * 1.6 * depth));
   }
-  std::map<std::int64_t, std::size_t> byId;
   std::array<int, 4> out{0, 0, 0, 0};
-  const Mat6 cov = Mat6::Identity() * 1e-8;
-  for (int k = 0; k < 120; ++k)
-  {
-    const TCameraMotion m = pathMotion(poses, k, 30.0, cov);
-    std::vector<std::pair<std::int64_t, Vec2>> z;
-    for (const auto& [id, i] : byId)
-    {
-      const bool jumps = i % 2 == 1;
-      if (jumps && (k == 8 || k == 9)) continue;
-      const Vec3& p = jumps && k >= 10 ? neighbours[i] : pts[i];
-      Vec2 uv;
-      if (cam->project(poses[k].toCamera(p), uv) && cam->isInImage(uv, 2))
-        z.emplace_back(id, uv + Vec2(gauss(rng), gauss(rng)));
-    }
-    const TShadowReport& rep = filter.processMeasurements(m, z);
-    for (const auto& d : rep.decisions)
-      ++out[(byId.at(d.id) % 2 == 1 ? 0 : 2) + (d.cls == EShadowClass::Dynamic ? 0 : 1)];
-    if (k == 0) byId = addSeenPoints(filter, *cam, poses[0], pts);
-  }
+  runKnownTracks(
+      filter, *cam, poses, pts, rng,
+      [&](int k, std::size_t i) -> std::optional<Vec3> {
+        const bool jumps = i % 2 == 1;
+        if (jumps && (k == 8 || k == 9)) return std::nullopt;
+        return jumps && k >= 10 ? neighbours[i] : pts[i];
+      },
+      [](int, std::size_t) { return Vec2::Zero().eval(); },
+      [&](const TDecision& d, std::size_t i) { ++out[(i % 2 == 1 ? 0 : 2) + (d.cls == EShadowClass::Dynamic ? 0 : 1)]; },
+      [](const std::map<std::int64_t, std::size_t>&) {});
   return out;
 }
 
@@ -110,36 +131,24 @@ std::array<int, 4> runWithSlides(unsigned seed, bool decideLone, bool slidesAreC
     kind.push_back(0);
     slide.push_back(Vec2::Zero());
   }
-  std::map<std::int64_t, std::size_t> byId;
   std::array<int, 4> out{0, 0, 0, 0};
-  const Mat6 cov = Mat6::Identity() * 1e-8;
-  for (int k = 0; k < 120; ++k)
-  {
-    const TCameraMotion m = pathMotion(poses, k, 30.0, cov);
-    std::vector<std::pair<std::int64_t, Vec2>> z;
-    for (const auto& [id, i] : byId)
-    {
-      const Vec3 p = kind[i] == 2 ? Vec3(pts[i] + k * objectVelocity) : pts[i];
-      Vec2 uv;
-      if (cam->project(poses[k].toCamera(p), uv) && cam->isInImage(uv, 2))
-        z.emplace_back(id, uv + std::max(0, k - 5) * slide[i] + Vec2(gauss(rng), gauss(rng)));
-    }
-    const TShadowReport& rep = filter.processMeasurements(m, z);
-    for (const auto& d : rep.decisions)
-    {
-      const int kd = kind[byId.at(d.id)];
-      if (d.cls == EShadowClass::Dynamic) ++out[kd == 1 ? 0 : kd == 2 ? 1 : 3];
-      else if (kd == 0) ++out[2];
-    }
-    if (k == 0)
-    {
-      byId = addSeenPoints(filter, *cam, poses[0], pts);
-      std::vector<std::int64_t> slides;
-      for (const auto& [id, i] : byId)
-        if (kind[i] == 1) slides.push_back(id);
-      if (slidesAreCopies) filter.setMapCopies(slides, true);
-    }
-  }
+  runKnownTracks(
+      filter, *cam, poses, pts, rng,
+      [&](int k, std::size_t i) -> std::optional<Vec3> {
+        return kind[i] == 2 ? Vec3(pts[i] + k * objectVelocity) : pts[i];
+      },
+      [&](int k, std::size_t i) { return Vec2(std::max(0, k - 5) * slide[i]); },
+      [&](const TDecision& d, std::size_t i) {
+        const int kd = kind[i];
+        if (d.cls == EShadowClass::Dynamic) ++out[kd == 1 ? 0 : kd == 2 ? 1 : 3];
+        else if (kd == 0) ++out[2];
+      },
+      [&](const std::map<std::int64_t, std::size_t>& byId) {
+        std::vector<std::int64_t> slides;
+        for (const auto& [id, i] : byId)
+          if (kind[i] == 1) slides.push_back(id);
+        if (slidesAreCopies) filter.setMapCopies(slides, true);
+      });
   return out;
 }
 }  // namespace
