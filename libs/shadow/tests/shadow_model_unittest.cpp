@@ -261,6 +261,7 @@ TEST(ShadowOptions, LoadSaveAndErrors)
   mrpt::config::CConfigFileMemory c;
   o.sigma_accel_px = 0.25;
   o.max_features = 70;
+  o.decide_lone_dynamic = true;
   o.saveToConfigFile(c, "shadow");
   std::string text;
   c.getContent(text);  // (MRPT 2.5.8's CConfigFileMemory does not read back its own writes)
@@ -268,12 +269,16 @@ TEST(ShadowOptions, LoadSaveAndErrors)
   o2.loadFromConfigFile(mrpt::config::CConfigFileMemory(text), "shadow");
   EXPECT_EQ(o2.sigma_accel_px, 0.25);
   EXPECT_EQ(o2.max_features, 70);
+  EXPECT_TRUE(o2.decide_lone_dynamic);
   // Noise, prior and search come from [slam] and [search]; the classifier's and the track management's
   // internals are constants (TOptions::k*), not keys.
-  EXPECT_EQ(core::knownKeys(o, "shadow").size(), 2u);
+  EXPECT_EQ(core::knownKeys(o, "shadow").size(), 3u);
   EXPECT_THROW(o2.loadFromConfigFile(mrpt::config::CConfigFileMemory("[shadow]\nmax_features = 0\n"), "shadow"),
                std::runtime_error);
   EXPECT_THROW(o2.loadFromConfigFile(mrpt::config::CConfigFileMemory("[shadow]\nsigma_accel_px = abc\n"), "shadow"),
+               std::runtime_error);
+  EXPECT_THROW(o2.loadFromConfigFile(mrpt::config::CConfigFileMemory("[shadow]\ndecide_lone_dynamic = maybe\n"),
+                                     "shadow"),
                std::runtime_error);
   EXPECT_THROW(CShadowFilter(CShadowFilter::TOptions(), nullptr), std::runtime_error);
 }
