@@ -17,7 +17,9 @@ OUT=/tmp/fig5-ka
 SEEDS=(7 11 23 42 101)
 args_parse "$@"
 mkdir -p "$OUT"
-PAPER=(--set input.known_association_robust=false --set input.known_association_first_map=static --set system.starved_below=0)
+# (The paper's filter decides a point that moves alone at once: shadow.decide_lone_dynamic.)
+PAPER=(--set input.known_association_robust=false --set input.known_association_first_map=static --set system.starved_below=0
+       --set shadow.decide_lone_dynamic=true)
 run() {  # run NAME CONFIG DATA KINDS [args...]
   "$BUILD/bin/imm-monoslam" "ini/$2.ini" "$3" --out "$OUT/out-$1" --no-gui --quiet \
     --set output.scene=false --set "input.known_association=$3/points_groundtruth.txt" \
