@@ -106,9 +106,11 @@ void COutputFiles::addFrame(const system::TSystemFrame& fr, const slam::CMonoSla
     m_tracks->flush();
     if (m_shadowLog)
     {
+      // A feature seen moving without a decision (TFeatureView::incoherent) is "held": the overlays and
+      // stats.csv count it as pending, a decided dynamic feature is "dynamic".
       for (const auto& v : fr.shadow->views)
-        m_shadowLog->addCells({r.timestamp, v.id, shadow::className(v.cls), v.uv.x(), v.uv.y(), v.searched ? 1 : 0,
-                               v.measured ? 1 : 0, v.ageFrames, v.score});
+        m_shadowLog->addCells({r.timestamp, v.id, v.incoherent ? std::string("held") : shadow::className(v.cls),
+                               v.uv.x(), v.uv.y(), v.searched ? 1 : 0, v.measured ? 1 : 0, v.ageFrames, v.score});
       m_shadowLog->flush();
     }
   }
