@@ -356,22 +356,21 @@ void CShadowFilter::classifyAndManage()
   // Where the dynamic features measured in this frame are: a static decision waits while the
   // feature is among them (amongDynamic), within a cell of SLAM's default 8 x 6 detection grid.
   const double amongRadius = m_cam->width() / 8.0;
-  std::vector<Vec2> dynamicUv;
+  // The classifier's verdicts first, then the decisions: a dynamic verdict is decided only when
+  // another feature within the same radius moves too (one decided dynamic or held alone, measured in
+  // this frame: movingUv, or a dynamic verdict of this frame). Alone, the feature is held like an
+  // incoherent one (TShadowFeature::lone) and decided once another one there moves: on a static real
+  // scene nearly every false dynamic verdict is a lone track that slid along near 3-D structure or low
+  // texture (doc/shadow.md, "Decision rules"), while the objects users see move (people, boxes, hands)
+  // are seen by several features. A copy of a map feature is decided alone (the map uses it meanwhile).
+  std::vector<Vec2> dynamicUv, movingUv, dynamicVerdictUv;
   for (auto& f : m_features)
   {
     if (!f.measured) ++f.missed;
-    if (f.cls == EShadowClass::Dynamic && f.measured) dynamicUv.push_back(f.uv);
+    if (f.cls != EShadowClass::Dynamic || !f.measured) continue;
+    dynamicUv.push_back(f.uv);
+    if (!f.incoherent || f.lone) movingUv.push_back(f.uv);
   }
-  // The classifier's verdicts first, then the decisions: a dynamic verdict is decided only when
-  // another feature within the same radius moves too (one decided dynamic or held alone, measured in
-  // this frame, or a dynamic verdict of this frame). Alone, the feature is held like an incoherent one
-  // (TShadowFeature::lone) and decided once another one there moves: on a static real scene nearly
-  // every false dynamic verdict is a lone track that slid along near 3-D structure or low texture
-  // (doc/shadow.md, "Decision rules"), while the objects users see move (people, boxes, hands) are
-  // seen by several features. A copy of a map feature is decided alone (the map uses it meanwhile).
-  std::vector<Vec2> movingUv, dynamicVerdictUv;
-  for (const auto& f : m_features)
-    if (f.cls == EShadowClass::Dynamic && f.measured && (!f.incoherent || f.lone)) movingUv.push_back(f.uv);
   const std::vector<TVerdict> verdicts = classifyPending(dynamicUv, amongRadius, dynamicVerdictUv);
   // Itself among the pixels counted (its verdict or its measurement), so "another one" is 2.
   const auto othersMove = [&](const Vec2& uv)
