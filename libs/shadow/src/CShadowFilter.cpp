@@ -388,7 +388,10 @@ void CShadowFilter::classifyAndManage()
       ++m_report.nLoneDecided;
       recordDecision(f, EShadowClass::Dynamic, f.loneVerdict);
     }
-    if (f.cls == EShadowClass::Pending && healthy && !decide(f, verdicts[i], othersMove(f.uv))) continue;
+    // (othersMove only matters to a dynamic verdict.)
+    if (f.cls == EShadowClass::Pending && healthy &&
+        !decide(f, verdicts[i], verdicts[i].c == EShadowClass::Dynamic && othersMove(f.uv)))
+      continue;
     if (keep(f, healthy)) kept.push_back(std::move(f));
   }
   m_features.swap(kept);
@@ -428,7 +431,7 @@ void CShadowFilter::endFrame()
     v.S = f.S;
     v.searched = f.searched;
     v.measured = f.measured;
-    v.score = f.measured ? f.score : 0;
+    v.score = f.score;  // (0 unless measured in this frame: predictAll)
     v.incoherent = f.incoherent;
     v.ageFrames = static_cast<int>(std::lround(f.age));
     m_report.views.push_back(v);
